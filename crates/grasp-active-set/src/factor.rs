@@ -1,0 +1,181 @@
+//! QR factorisation of the key-set rows, `A_Wᵀ = Q [R; 0]`, updated in place.
+//!
+//! Adding a row costs one `Qᵀa` and Givens rotations; removing one shifts R's columns
+//! and restores the triangle with Givens rotations. Both are O(n²) and allocate nothing.
+
+/// Factorisation of up to `n` rows in `n` dimensions (n = k + 1, the elastic variable last).
+#[derive(Clone, Debug)]
+pub(crate) struct Factor {
+    n: usize,
+    /// Q, column-major, n × n.
+    q: Vec<f64>,
+    /// R, column-major, n × n; column c holds the key-set row `rows[c]`.
+    r: Vec<f64>,
+    rows: Vec<usize>,
+    u1: Vec<f64>,
+    lambda: Vec<f64>,
+    buf: Vec<f64>,
+    v: Vec<f64>,
+}
+
+#[inline]
+fn givens(a: f64, b: f64) -> (f64, f64, f64) {
+    let r = a.hypot(b);
+    if r == 0.0 {
+        (1.0, 0.0, 0.0)
+    } else {
+        (a / r, b / r, r)
+    }
+}
+
+impl Factor {
+    pub(crate) fn new(n: usize) -> Self {
+        let mut f = Self {
+            n,
+            q: vec![0.0; n * n],
+            r: vec![0.0; n * n],
+            rows: Vec::with_capacity(n),
+            u1: vec![0.0; n],
+            lambda: vec![0.0; n],
+            buf: vec![0.0; n],
+            v: vec![0.0; n],
+        };
+        f.clear();
+        f
+    }
+
+    /// Empties the key set (Q = I).
+    pub(crate) fn clear(&mut self) {
+        self.rows.clear();
+        self.q.iter_mut().for_each(|x| *x = 0.0);
+        for i in 0..self.n {
+            self.q[i * self.n + i] = 1.0;
+        }
+    }
+
+    /// The key-set rows, in factor order.
+    pub(crate) fn rows(&self) -> &[usize] {
+        &self.rows
+    }
+
+    pub(crate) fn contains(&self, id: usize) -> bool {
+        self.rows.contains(&id)
+    }
+
+    pub(crate) fn position(&self, id: usize) -> Option<usize> {
+        self.rows.iter().position(|&r| r == id)
+    }
+
+    /// Multiplier of the key-set row at `pos` from the last [`Self::solve`].
+    pub(crate) fn lambda(&self, pos: usize) -> f64 {
+        self.lambda[pos]
+    }
+
+    fn rotate_q(&mut self, j: usize, c: f64, s: f64) {
+        let n = self.n;
+        let (left, right) = self.q.split_at_mut((j + 1) * n);
+        let (qj, qj1) = (&mut left[j * n..], &mut right[..n]);
+        for (x, y) in qj.iter_mut().zip(qj1.iter_mut()) {
+            let (a, b) = (*x, *y);
+            *x = c * a + s * b;
+            *y = -s * a + c * b;
+        }
+    }
+
+    /// Adds the row written by `fill`; false (and no change) when it is within `tol`
+    /// (relative) of the span of the key set, or the set is full.
+    pub(crate) fn add(&mut self, id: usize, tol: f64, fill: impl FnOnce(&mut [f64])) -> bool {
+        let (n, t) = (self.n, self.rows.len());
+        if t == n {
+            return false;
+        }
+        fill(&mut self.buf);
+        let anorm = self.buf.iter().map(|x| x * x).sum::<f64>().sqrt();
+        for j in 0..n {
+            self.v[j] = self.q[j * n..(j + 1) * n]
+                .iter()
+                .zip(&self.buf)
+                .map(|(a, b)| a * b)
+                .sum();
+        }
+        let tail = self.v[t..].iter().map(|x| x * x).sum::<f64>().sqrt();
+        if !(tail > tol * anorm) {
+            return false;
+        }
+        for j in (t + 1..n).rev() {
+            let (c, s, r) = givens(self.v[j - 1], self.v[j]);
+            self.v[j - 1] = r;
+            self.v[j] = 0.0;
+            self.rotate_q(j - 1, c, s);
+        }
+        self.r[t * n..t * n + t + 1].copy_from_slice(&self.v[..=t]);
+        self.rows.push(id);
+        true
+    }
+
+    /// Removes the key-set row at `pos`.
+    pub(crate) fn remove(&mut self, pos: usize) {
+        let (n, t) = (self.n, self.rows.len());
+        self.rows.remove(pos);
+        self.r.copy_within((pos + 1) * n..t * n, pos * n);
+        for j in pos..t - 1 {
+            let (c, s, r) = givens(self.r[j * n + j], self.r[j * n + j + 1]);
+            self.r[j * n + j] = r;
+            self.r[j * n + j + 1] = 0.0;
+            for col in j + 1..t - 1 {
+                let (a, b) = (self.r[col * n + j], self.r[col * n + j + 1]);
+                self.r[col * n + j] = c * a + s * b;
+                self.r[col * n + j + 1] = -s * a + c * b;
+            }
+            self.rotate_q(j, c, s);
+        }
+    }
+
+    /// Minimises `½‖z‖² + penalty·z[n−1]` subject to `a_i·z = rhs(i)` for the key set:
+    /// the minimiser goes to `zstar`, the multipliers to [`Self::lambda`]. With
+    /// `last_fixed` (z[n−1] is pinned by the key set) the penalty term of z* is exactly
+    /// zero and is skipped.
+    pub(crate) fn solve(
+        &mut self,
+        penalty: f64,
+        last_fixed: bool,
+        rhs: impl Fn(usize) -> f64,
+        zstar: &mut [f64],
+    ) {
+        let (n, t) = (self.n, self.rows.len());
+        let last = n - 1;
+        // Rᵀ u1 = b_W (forward substitution).
+        for i in 0..t {
+            let col = &self.r[i * n..i * n + i + 1];
+            let mut s = rhs(self.rows[i]);
+            for j in 0..i {
+                s -= col[j] * self.u1[j];
+            }
+            self.u1[i] = s / col[i];
+        }
+        // z* = Q1 u1 − penalty · Q2 Q2ᵀ e_last.
+        zstar.iter_mut().for_each(|x| *x = 0.0);
+        for j in 0..n {
+            let coef = if j < t {
+                self.u1[j]
+            } else if last_fixed {
+                0.0
+            } else {
+                -penalty * self.q[j * n + last]
+            };
+            if coef != 0.0 {
+                for (z, qv) in zstar.iter_mut().zip(&self.q[j * n..(j + 1) * n]) {
+                    *z += coef * qv;
+                }
+            }
+        }
+        // R λ = u1 + penalty · Q1ᵀ e_last (back substitution).
+        for i in (0..t).rev() {
+            let mut s = self.u1[i] + penalty * self.q[i * n + last];
+            for j in i + 1..t {
+                s -= self.r[j * n + i] * self.lambda[j];
+            }
+            self.lambda[i] = s / self.r[i * n + i];
+        }
+    }
+}

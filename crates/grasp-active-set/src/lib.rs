@@ -1,0 +1,668 @@
+//! Native backend: the paper's primal "key constraint set" method (Jia et al.,
+//! section 4.2, Steps 1–4), specialised to this problem's identity Hessian.
+//!
+//! # Reduction
+//! With `u = D τ` (`D = diag(√w_j)`), the objective is `‖u‖²`. The consistency
+//! equalities are eliminated with an orthonormal null-space basis: `u = u0 + N y`, `u0`
+//! the minimum-norm particular solution, so `‖u‖² = ‖u0‖² + ‖y‖²` and the paper's
+//! algorithm runs unchanged on `y` (a least-distance problem). Every inequality row is
+//! normalised to unit length in `y`, so one tolerance fits rows of any scale
+//! (soft-finger rows with `mu_torsion = 0.01` are 100× larger than force rows).
+//!
+//! # Feasible start (Step 1)
+//! The start is `y0` (zero, or the warm torque, or the point of a warm key constraint
+//! set). Rows it violates get an elastic variable `s ≥ 0` (`Ĥ_i y + s ≥ ĉ_i`) and the
+//! objective a penalty `M s`. `(y0, max violation)` is then feasible, and the same
+//! primal iteration drives `s` to zero: an exact penalty, raised ×1000 while `s` stays
+//! positive. If `s` stays positive at the largest penalty the grasp is infeasible.
+//! Every iterate satisfies every row; the answer is re-checked before it is returned.
+//!
+//! # Iteration (Steps 2–4)
+//! The equality-constrained subproblem (eq. 44) is solved from a QR factorisation of
+//! the key-set rows, updated with Givens rotations when a row joins (eq. 47) or leaves
+//! (most negative multiplier, Step 4): O(k²) per iteration, no allocation.
+//! Zero-length steps switch to Bland's rule, which rules out cycling.
+
+use grasp_core::linalg::svd;
+use grasp_core::matrix::{dot, norm_inf};
+use grasp_core::{Matrix, Reason, Solution, Status, TorqueQp, TorqueSolver, WarmStart};
+
+mod factor;
+use factor::Factor;
+
+/// Settings of the active-set method. Tolerances are relative to the problem's scale
+/// (`max(‖ĉ‖∞, ‖y‖∞)`, in units of the weighted torque).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ActiveSetSettings {
+    /// Iteration cap (each iteration is one subproblem solve). Default 10 000.
+    pub max_iterations: usize,
+    /// A row holds when `Ĥ_i y − ĉ_i ≥ −feasibility_tolerance · scale`. Default 1e-9.
+    pub feasibility_tolerance: f64,
+    /// A multiplier counts as non-negative above `−multiplier_tolerance · scale`.
+    /// Default 1e-10.
+    pub multiplier_tolerance: f64,
+    /// A row is linearly dependent on the key set when the part of it outside their span
+    /// is below this, relative to its norm. Default 1e-10.
+    pub dependence_tolerance: f64,
+    /// First elastic penalty M, relative to the scale. Default 1e3.
+    pub elastic_penalty: f64,
+    /// Times M may grow ×1000 before the grasp is declared infeasible. Default 4.
+    pub penalty_increases: u32,
+}
+
+impl Default for ActiveSetSettings {
+    fn default() -> Self {
+        Self {
+            max_iterations: 10_000,
+            feasibility_tolerance: 1e-9,
+            multiplier_tolerance: 1e-10,
+            dependence_tolerance: 1e-10,
+            elastic_penalty: 1e3,
+            penalty_increases: 4,
+        }
+    }
+}
+
+/// A setting out of range.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("active-set setting {field}: expected {expected}")]
+pub struct SettingsError {
+    /// The setting.
+    pub field: &'static str,
+    /// Its valid range.
+    pub expected: &'static str,
+}
+
+impl ActiveSetSettings {
+    /// Checks every setting's range.
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        let tol = |field, v: f64| {
+            if v.is_finite() && v > 0.0 && v < 1.0 {
+                Ok(())
+            } else {
+                Err(SettingsError { field, expected: "a number in (0, 1)" })
+            }
+        };
+        if self.max_iterations == 0 {
+            return Err(SettingsError { field: "max_iterations", expected: "at least 1" });
+        }
+        tol("feasibility_tolerance", self.feasibility_tolerance)?;
+        tol("multiplier_tolerance", self.multiplier_tolerance)?;
+        tol("dependence_tolerance", self.dependence_tolerance)?;
+        if !(self.elastic_penalty.is_finite() && self.elastic_penalty >= 1.0) {
+            return Err(SettingsError { field: "elastic_penalty", expected: "a finite number ≥ 1" });
+        }
+        Ok(())
+    }
+}
+
+/// Errors building the solver.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum BuildError {
+    /// Bad settings.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    /// The null-space decomposition failed.
+    #[error(transparent)]
+    Svd(#[from] grasp_core::linalg::SvdError),
+}
+
+/// Marker for the elastic bound `s ≥ 0` in the key set.
+const S_ROW: usize = usize::MAX;
+
+/// The native solver for one grasp. Build once, then solve for many wrenches.
+#[derive(Clone, Debug)]
+pub struct ActiveSetSolver {
+    qp: TorqueQp,
+    settings: ActiveSetSettings,
+    /// `1/√w_j`.
+    dinv: Vec<f64>,
+    /// N, m × k: orthonormal null-space basis of `C D⁻¹`.
+    null_basis: Matrix,
+    /// `u0 = pu · w`, m × 6.
+    pu: Matrix,
+    /// Normalised rows `Ĥ`, R × k (R: rows of H that depend on τ).
+    a: Matrix,
+    /// Row r of `a` is row `h_row[r]` of H.
+    h_row: Vec<usize>,
+    /// Row of `a` for each row of H (`usize::MAX` for rows no torque affects).
+    red_row: Vec<usize>,
+    /// `‖(H D⁻¹ N)_i‖` of each reduced row.
+    nu: Vec<f64>,
+    /// `ĉ = c0n − mn · w`.
+    c0n: Vec<f64>,
+    mn: Matrix,
+    /// Rows of H that no torque affects: `c0 − m · w ≤ 0` must hold as it is.
+    fixed: Vec<usize>,
+    fixed_c0: Vec<f64>,
+    fixed_m: Matrix,
+    ws: Workspace,
+}
+
+#[derive(Clone, Debug)]
+struct Workspace {
+    b: Vec<f64>,
+    e: Vec<f64>,
+    resid: Vec<f64>,
+    ad: Vec<f64>,
+    in_set: Vec<bool>,
+    z: Vec<f64>,
+    zstar: Vec<f64>,
+    d: Vec<f64>,
+    u: Vec<f64>,
+    factor: Factor,
+}
+
+impl ActiveSetSolver {
+    /// Precomputes everything that depends only on the grasp.
+    pub fn new(qp: TorqueQp, settings: ActiveSetSettings) -> Result<Self, BuildError> {
+        settings.validate()?;
+        let m = qp.joints();
+        let dinv: Vec<f64> = qp.weights.iter().map(|w| 1.0 / w.sqrt()).collect();
+        let scale_cols = |a: &Matrix| Matrix::from_fn(a.nrows(), m, |i, j| a[(i, j)] * dinv[j]);
+        let cd = scale_cols(&qp.eq);
+        let dec = svd(&cd)?;
+        let rc = dec.rank(qp.rank_tolerance);
+        let k = m - rc;
+        let null_basis = Matrix::from_fn(m, k, |i, j| dec.v[(i, rc + j)]);
+        // u0 = Cd⁺ e = −Cd⁺ eq_w w.
+        let pu = dec.pseudo_inverse(qp.rank_tolerance).matmul(&qp.eq_w);
+        let pu = Matrix::from_fn(m, 6, |i, j| -pu[(i, j)]);
+        let hd = scale_cols(&qp.h);
+        let hn = hd.matmul(&null_basis);
+        // ĉ(w) = c0 − (hw + Hd pu) w, before normalisation.
+        let mfull = {
+            let hp = hd.matmul(&pu);
+            Matrix::from_fn(qp.inequality_rows(), 6, |i, j| qp.hw[(i, j)] + hp[(i, j)])
+        };
+        let rows = qp.inequality_rows();
+        let norms: Vec<f64> = (0..rows).map(|i| grasp_core::matrix::norm2(hn.row(i))).collect();
+        // A row no torque affects: its norm in y is at rounding level of H's.
+        let hscale = (0..rows)
+            .map(|i| grasp_core::matrix::norm2(hd.row(i)))
+            .fold(0.0, f64::max);
+        let zero = 1e3 * f64::EPSILON * (m as f64) * hscale.max(f64::MIN_POSITIVE);
+        let (mut h_row, mut fixed) = (Vec::new(), Vec::new());
+        let mut red_row = vec![usize::MAX; rows];
+        for (i, &nrm) in norms.iter().enumerate() {
+            if nrm > zero {
+                red_row[i] = h_row.len();
+                h_row.push(i);
+            } else {
+                fixed.push(i);
+            }
+        }
+        let nr = h_row.len();
+        let a = Matrix::from_fn(nr, k, |r, j| hn[(h_row[r], j)] / norms[h_row[r]]);
+        let nu: Vec<f64> = h_row.iter().map(|&i| norms[i]).collect();
+        let c0n: Vec<f64> = h_row.iter().map(|&i| qp.c0[i] / norms[i]).collect();
+        let mn = Matrix::from_fn(nr, 6, |r, j| mfull[(h_row[r], j)] / norms[h_row[r]]);
+        let fixed_c0 = fixed.iter().map(|&i| qp.c0[i]).collect();
+        let fixed_m = Matrix::from_fn(fixed.len(), 6, |r, j| mfull[(fixed[r], j)]);
+        let kp = k + 1;
+        let ws = Workspace {
+            b: vec![0.0; nr],
+            e: vec![0.0; nr],
+            resid: vec![0.0; nr],
+            ad: vec![0.0; nr],
+            in_set: vec![false; nr],
+            z: vec![0.0; kp],
+            zstar: vec![0.0; kp],
+            d: vec![0.0; kp],
+            u: vec![0.0; m],
+            factor: Factor::new(kp),
+        };
+        Ok(Self {
+            qp,
+            settings,
+            dinv,
+            null_basis,
+            pu,
+            a,
+            h_row,
+            red_row,
+            nu,
+            c0n,
+            mn,
+            fixed,
+            fixed_c0,
+            fixed_m,
+            ws,
+        })
+    }
+
+    /// The settings in use.
+    pub fn settings(&self) -> &ActiveSetSettings {
+        &self.settings
+    }
+
+    /// Dimension k of the reduced space (joints minus independent consistency rows).
+    pub fn reduced_dim(&self) -> usize {
+        self.null_basis.ncols()
+    }
+}
+
+/// What the iteration ended with.
+enum End {
+    Optimal,
+    Infeasible,
+    IterationLimit,
+    Numerical(&'static str),
+}
+
+impl TorqueSolver for ActiveSetSolver {
+    fn name(&self) -> &'static str {
+        "active-set"
+    }
+
+    fn problem(&self) -> &TorqueQp {
+        &self.qp
+    }
+
+    fn solve_raw(&mut self, w: &[f64; 6], warm: &WarmStart<'_>, out: &mut Solution) {
+        out.torque.clear();
+        out.iterations = 0;
+        let active = out.active_set.get_or_insert_with(Vec::new);
+        active.clear();
+        // Rows that no torque affects must hold for the wrench alone.
+        for (r, &row) in self.fixed.iter().enumerate() {
+            let c = self.fixed_c0[r] - dot(self.fixed_m.row(r), w);
+            let tol = self.settings.feasibility_tolerance * self.qp.c0[row].abs().max(norm_inf(w)).max(1.0);
+            if c > tol {
+                out.status = Status::Infeasible;
+                out.reason = Some(Reason::FixedRowViolated {
+                    row,
+                    description: self.qp.describe_row(row),
+                    violation: c,
+                });
+                out.active_set = None;
+                return;
+            }
+        }
+        let ws = &mut self.ws;
+        let k = self.null_basis.ncols();
+        for (r, b) in ws.b.iter_mut().enumerate() {
+            *b = self.c0n[r] - dot(self.mn.row(r), w);
+        }
+        self.pu.mul_vec_into(w, &mut ws.u);
+        // Starting point y0.
+        ws.z.iter_mut().for_each(|v| *v = 0.0);
+        ws.e.iter_mut().for_each(|v| *v = 0.0);
+        ws.in_set.iter_mut().for_each(|v| *v = false);
+        ws.factor.clear();
+        let mut state = Iter::new(self);
+        let end = state.run(warm);
+        let iterations = state.iterations;
+        out.iterations = iterations;
+        match end {
+            End::Optimal => {
+                self.write_solution(out);
+                out.status = Status::Optimal;
+            }
+            End::IterationLimit => {
+                // Iterates are feasible once s = 0: hand the last one back.
+                if self.ws.factor.contains(S_ROW) {
+                    self.write_solution(out);
+                } else {
+                    out.active_set = None;
+                }
+                out.status = Status::IterationLimit;
+                out.reason = Some(Reason::Backend(format!(
+                    "stopped after {iterations} iterations (max_iterations = {})",
+                    self.settings.max_iterations
+                )));
+            }
+            End::Infeasible => {
+                out.status = Status::Infeasible;
+                out.reason = Some(Reason::NoAdmissibleTorque {
+                    relaxation: self.ws.z[k],
+                    blocking: self.blocking_description(),
+                });
+                out.active_set = None;
+            }
+            End::Numerical(why) => {
+                out.status = Status::NumericalFailure;
+                out.reason = Some(Reason::Backend(why.to_string()));
+                out.active_set = None;
+            }
+        }
+    }
+}
+
+impl ActiveSetSolver {
+    /// The key-set rows at the end, described, for infeasibility reports.
+    fn blocking_description(&self) -> Vec<String> {
+        self.ws
+            .factor
+            .rows()
+            .iter()
+            .filter(|&&r| r != S_ROW)
+            .map(|&r| self.qp.describe_row(self.h_row[r]))
+            .collect()
+    }
+
+    /// τ = D⁻¹(u0 + N y), the key set as rows of H, and multipliers for `Σ w τ²`.
+    fn write_solution(&self, out: &mut Solution) {
+        let ws = &self.ws;
+        let k = self.null_basis.ncols();
+        let m = self.qp.joints();
+        out.torque.resize(m, 0.0);
+        for j in 0..m {
+            out.torque[j] = (ws.u[j] + dot(self.null_basis.row(j), &ws.z[..k])) * self.dinv[j];
+        }
+        let active = out.active_set.get_or_insert_with(Vec::new);
+        active.clear();
+        out.multipliers.clear();
+        out.multipliers.resize(self.qp.inequality_rows(), 0.0);
+        for (pos, &r) in ws.factor.rows().iter().enumerate() {
+            if r != S_ROW {
+                active.push(self.h_row[r]);
+                // ½‖y‖² on unit rows → ‖u‖² on rows of H: μ = 2 λ / ν.
+                out.multipliers[self.h_row[r]] = 2.0 * ws.factor.lambda(pos).max(0.0) / self.nu[r];
+            }
+        }
+        active.sort_unstable();
+    }
+}
+
+/// One run of the iteration, borrowing the solver.
+struct Iter<'s> {
+    s: &'s mut ActiveSetSolver,
+    iterations: usize,
+    penalty: f64,
+    scale: f64,
+    bland: bool,
+}
+
+impl<'s> Iter<'s> {
+    fn new(s: &'s mut ActiveSetSolver) -> Self {
+        let scale = norm_inf(&s.ws.b).max(f64::MIN_POSITIVE);
+        let penalty = s.settings.elastic_penalty * scale.max(1e-12);
+        Self { s, iterations: 0, penalty, scale, bland: false }
+    }
+
+    fn k(&self) -> usize {
+        self.s.null_basis.ncols()
+    }
+
+    /// `a_i · v` in (y, s) space, for a row index or [`S_ROW`].
+    fn row_dot(&self, i: usize, v: &[f64]) -> f64 {
+        let k = self.k();
+        if i == S_ROW {
+            v[k]
+        } else {
+            dot(self.s.a.row(i), &v[..k]) + self.s.ws.e[i] * v[k]
+        }
+    }
+
+    fn feas_tol(&self) -> f64 {
+        let y = norm_inf(&self.s.ws.z[..self.k()]);
+        self.s.settings.feasibility_tolerance * self.scale.max(y)
+    }
+
+    /// Adds row `i` to the key set; false when it depends on the rows already there.
+    fn add(&mut self, i: usize) -> bool {
+        let k = self.k();
+        let ws = &mut self.s.ws;
+        let (a, e) = (&self.s.a, &ws.e);
+        let tol = self.s.settings.dependence_tolerance;
+        let ok = ws.factor.add(i, tol, |buf| {
+            buf.iter_mut().for_each(|v| *v = 0.0);
+            if i == S_ROW {
+                buf[k] = 1.0;
+            } else {
+                buf[..k].copy_from_slice(a.row(i));
+                buf[k] = e[i];
+            }
+        });
+        if ok && i != S_ROW {
+            ws.in_set[i] = true;
+            ws.resid[i] = 0.0;
+        }
+        ok
+    }
+
+    fn remove(&mut self, pos: usize) {
+        let r = self.s.ws.factor.rows()[pos];
+        if r != S_ROW {
+            self.s.ws.in_set[r] = false;
+        }
+        self.s.ws.factor.remove(pos);
+    }
+
+    /// Exact residuals `a_i z − b_i` of every row.
+    fn refresh_residuals(&mut self) {
+        for i in 0..self.s.ws.b.len() {
+            let r = self.row_dot(i, &self.s.ws.z) - self.s.ws.b[i];
+            self.s.ws.resid[i] = r;
+        }
+    }
+
+    /// Step 1: a feasible start and its key set.
+    fn start(&mut self, warm: &WarmStart<'_>) {
+        let k = self.k();
+        let nr = self.s.ws.b.len();
+        if let Some(set) = warm.active_set {
+            // Start at the minimiser over the given key set with s fixed at 0.
+            self.add(S_ROW);
+            for &h in set {
+                let r = self.s.red_row[h];
+                if r != usize::MAX && !self.s.ws.in_set[r] {
+                    self.add(r);
+                }
+            }
+            self.subproblem(0.0);
+            let (z, zs) = (&mut self.s.ws.z, &self.s.ws.zstar);
+            z.copy_from_slice(zs);
+            z[k] = 0.0;
+        } else if let Some(t) = warm.torque {
+            // y0 = Nᵀ(D τ − u0).
+            let s = &mut *self.s;
+            for j in 0..k {
+                s.ws.z[j] = (0..t.len())
+                    .map(|i| s.null_basis[(i, j)] * (t[i] / s.dinv[i] - s.ws.u[i]))
+                    .sum();
+            }
+        }
+        // Elastic variable for the rows y0 violates.
+        self.refresh_residuals();
+        let mut worst = (0.0, usize::MAX);
+        for i in 0..nr {
+            let v = -self.s.ws.resid[i];
+            if v > 0.0 && !self.s.ws.in_set[i] {
+                self.s.ws.e[i] = 1.0;
+                if v > worst.0 {
+                    worst = (v, i);
+                }
+            }
+        }
+        let tol = self.feas_tol();
+        if worst.0 > tol {
+            if let Some(pos) = self.s.ws.factor.position(S_ROW) {
+                self.remove(pos);
+            }
+            self.s.ws.z[k] = worst.0;
+            self.refresh_residuals();
+            self.add(worst.1);
+        } else {
+            self.s.ws.e.iter_mut().for_each(|v| *v = 0.0);
+            self.s.ws.z[k] = 0.0;
+            self.refresh_residuals();
+            if !self.s.ws.factor.contains(S_ROW) {
+                self.add(S_ROW);
+            }
+            if warm.active_set.is_none() && warm.torque.is_some() {
+                // The key set at a given feasible torque: the rows active there.
+                for i in 0..nr {
+                    if self.s.ws.resid[i].abs() <= tol && !self.s.ws.in_set[i] {
+                        self.add(i);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The minimiser of `½‖z‖² + penalty·s` over the key set into `zstar`, and the
+    /// multipliers into the factor.
+    fn subproblem(&mut self, penalty: f64) {
+        let ws = &mut self.s.ws;
+        let b = &ws.b;
+        // With s fixed at 0 the penalty moves only the multiplier of `s ≥ 0`; leaving it
+        // out of z* keeps M's rounding out of y.
+        let exact = ws.factor.contains(S_ROW);
+        ws.factor.solve(penalty, exact, |i| if i == S_ROW { 0.0 } else { b[i] }, &mut ws.zstar);
+    }
+
+    fn run(&mut self, warm: &WarmStart<'_>) -> End {
+        self.start(warm);
+        let k = self.k();
+        let kp = k + 1;
+        let max_it = self.s.settings.max_iterations;
+        let mut increases = 0;
+        let mut at_minimum = false;
+        let mut degenerate = 0usize;
+        loop {
+            if self.iterations >= max_it {
+                return End::IterationLimit;
+            }
+            self.iterations += 1;
+            // Step 2: the equality-constrained minimiser (eq. 44) and d = τ' − τ.
+            self.subproblem(self.penalty);
+            let ws = &mut self.s.ws;
+            let mut dmax: f64 = 0.0;
+            for j in 0..kp {
+                ws.d[j] = ws.zstar[j] - ws.z[j];
+                dmax = dmax.max(ws.d[j].abs());
+            }
+            let zmax = norm_inf(&ws.z).max(self.scale);
+            if at_minimum || dmax <= 1e3 * f64::EPSILON * kp as f64 * zmax {
+                at_minimum = false;
+                // Step 4: multipliers of the key set.
+                let tol = self.s.settings.multiplier_tolerance * zmax;
+                let rows = self.s.ws.factor.rows();
+                let mut drop: Option<(usize, f64)> = None;
+                for (pos, &r) in rows.iter().enumerate() {
+                    let l = self.s.ws.factor.lambda(pos);
+                    if l < -tol {
+                        let better = match drop {
+                            None => true,
+                            Some((p, best)) => {
+                                if self.bland {
+                                    r < rows[p]
+                                } else {
+                                    l < best
+                                }
+                            }
+                        };
+                        if better {
+                            drop = Some((pos, l));
+                        }
+                    }
+                }
+                if let Some((pos, _)) = drop {
+                    self.remove(pos);
+                    continue;
+                }
+                if self.s.ws.factor.contains(S_ROW) {
+                    return self.finish();
+                }
+                // Stationary with s free: the penalty is too small, or no torque exists.
+                if increases == self.s.settings.penalty_increases {
+                    return if self.s.ws.z[k] > self.feas_tol() {
+                        End::Infeasible
+                    } else {
+                        End::Numerical("the elastic variable would not leave the key set's span")
+                    };
+                }
+                increases += 1;
+                self.penalty *= 1e3;
+                continue;
+            }
+            // Step 2, ratio test (eqs. 45–47).
+            let dnorm = grasp_core::matrix::norm2(&self.s.ws.d);
+            let dep = self.s.settings.dependence_tolerance * dnorm;
+            let mut alpha = 1.0;
+            let mut block = None;
+            let nr = self.s.ws.b.len();
+            for i in 0..nr {
+                if self.s.ws.in_set[i] {
+                    continue;
+                }
+                let ad = self.row_dot(i, &self.s.ws.d);
+                self.s.ws.ad[i] = ad;
+                if ad < -dep {
+                    let ratio = self.s.ws.resid[i].max(0.0) / -ad;
+                    if ratio < alpha || (self.bland && ratio == alpha && block.is_some_and(|b| i < b)) {
+                        alpha = ratio;
+                        block = Some(i);
+                    }
+                }
+            }
+            if !self.s.ws.factor.contains(S_ROW) {
+                let ds = self.s.ws.d[k];
+                if ds < -dep {
+                    let ratio = self.s.ws.z[k].max(0.0) / -ds;
+                    if ratio < alpha {
+                        alpha = ratio;
+                        block = Some(S_ROW);
+                    }
+                }
+            }
+            let ws = &mut self.s.ws;
+            for j in 0..kp {
+                ws.z[j] += alpha * ws.d[j];
+            }
+            for i in 0..nr {
+                if !ws.in_set[i] {
+                    ws.resid[i] += alpha * ws.ad[i];
+                }
+            }
+            match block {
+                None => at_minimum = true,
+                Some(p) => {
+                    if p == S_ROW {
+                        self.s.ws.z[k] = 0.0;
+                    }
+                    if alpha == 0.0 {
+                        degenerate += 1;
+                        if degenerate > kp {
+                            self.bland = true;
+                        }
+                    } else {
+                        degenerate = 0;
+                    }
+                    // A row within rounding of the key set's span blocks only through
+                    // rounding in d: the step has in effect reached the subproblem minimum.
+                    if !self.add(p) {
+                        at_minimum = true;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Re-solves the final key set without the penalty (exact multipliers) and checks
+    /// primal and dual feasibility before accepting.
+    fn finish(&mut self) -> End {
+        let k = self.k();
+        self.subproblem(0.0);
+        let ws = &mut self.s.ws;
+        ws.z.copy_from_slice(&ws.zstar);
+        ws.z[k] = 0.0;
+        ws.e.iter_mut().for_each(|v| *v = 0.0);
+        self.refresh_residuals();
+        let tol = self.feas_tol();
+        let ws = &self.s.ws;
+        if ws.resid.iter().any(|&r| r < -tol) {
+            return End::Numerical("the final point violates a row beyond tolerance");
+        }
+        let ltol = self.s.settings.multiplier_tolerance * norm_inf(&ws.z).max(self.scale) * 10.0;
+        for (pos, &r) in ws.factor.rows().iter().enumerate() {
+            if r != S_ROW && ws.factor.lambda(pos) < -ltol {
+                return End::Numerical("a multiplier of the final key set is negative");
+            }
+        }
+        End::Optimal
+    }
+}

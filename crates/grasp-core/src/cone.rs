@@ -1,0 +1,350 @@
+//! Inscribed polyhedral friction cones (paper section 2, eqs. 5–17).
+//!
+//! Every cone is built from its vertex rays, which lie on the exact cone, and each face
+//! is computed from its vertices with cross products. The printed coefficient formulas
+//! are not used: eq. 5 has `cos` where `sin` belongs, and eqs. 10/14 are garbled.
+//!
+//! Each face row is scaled so that its `fz` coefficient is 1: a row reads
+//! `fz − (a·fx + b·fy + c·mz) ≥ 0`, so its value is a slack in units of normal force.
+
+use crate::contact::ContactModel;
+use crate::matrix::Matrix;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// Largest number of sides accepted.
+pub const MAX_SIDES: usize = 4096;
+/// Largest number of SFCe latitudes per hemisphere accepted.
+pub const MAX_LATITUDES: usize = 256;
+
+/// Where the SFCe latitudes sit on each meridian ellipse.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SfceSpacing {
+    /// The paper's eq. 13: polar angles `ψi = πi/(2K)` uniform in the `(r, mz)` plane.
+    /// When `mu_torsion ≪ mu` this crowds the latitudes near the pole.
+    #[default]
+    Paper,
+    /// Uniform in the normalised ellipse angle `αi = πi/(2K)`:
+    /// `r = mu·cos αi`, `mz = mu_torsion·sin αi`.
+    Uniform,
+}
+
+/// How finely the friction cones are linearised.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Linearization {
+    /// N, the number of sides of the inscribed polygon (3..=4096). Default 8.
+    pub sides: usize,
+    /// K, the number of latitudes per hemisphere for SFCe contacts (1..=256). Default 2.
+    pub latitudes: usize,
+    /// Placement of the SFCe latitudes. Default: the paper's.
+    pub sfce_spacing: SfceSpacing,
+}
+
+impl Default for Linearization {
+    fn default() -> Self {
+        Self {
+            sides: 8,
+            latitudes: 2,
+            sfce_spacing: SfceSpacing::Paper,
+        }
+    }
+}
+
+/// A linearisation setting out of range.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LinearizationError {
+    /// `sides` outside `3..=MAX_SIDES`.
+    #[error("linearization.sides must be an integer from 3 to {MAX_SIDES}, got {0}")]
+    Sides(usize),
+    /// `latitudes` outside `1..=MAX_LATITUDES`.
+    #[error("linearization.latitudes must be an integer from 1 to {MAX_LATITUDES}, got {0}")]
+    Latitudes(usize),
+}
+
+impl Linearization {
+    /// Checks the ranges of N and K.
+    pub fn validate(&self) -> Result<(), LinearizationError> {
+        if !(3..=MAX_SIDES).contains(&self.sides) {
+            return Err(LinearizationError::Sides(self.sides));
+        }
+        if !(1..=MAX_LATITUDES).contains(&self.latitudes) {
+            return Err(LinearizationError::Latitudes(self.latitudes));
+        }
+        Ok(())
+    }
+
+    /// Number of inequality rows for one contact of this model:
+    /// 1 (FPC), N+1 (PCwF), 2N+1 (SFCl) or 2NK+1 (SFCe), as in eqs. 7, 11 and 17.
+    pub fn rows_for(&self, model: &ContactModel) -> usize {
+        let (n, k) = (self.sides, self.latitudes);
+        match model {
+            ContactModel::Fpc => 1,
+            ContactModel::Pcwf { .. } => n + 1,
+            ContactModel::SfcLinear { .. } => 2 * n + 1,
+            ContactModel::SfcElliptic { .. } => 2 * n * k + 1,
+        }
+    }
+}
+
+/// An inscribed polyhedral cone `S f ≥ 0` for one contact, with the vertex rays it was
+/// built from.
+#[derive(Clone, Debug)]
+pub struct InscribedCone {
+    /// Face rows, one per inequality, `rows × dim`; the last row is `fz ≥ 0`.
+    pub faces: Matrix,
+    /// Vertex rays with `fz = 1`, in the contact's force layout, each on the exact cone.
+    pub vertices: Vec<Vec<f64>>,
+}
+
+/// Builds the inscribed cone of `model` (assumed validated) at linearisation `lin`.
+///
+/// Row order follows the paper's eq. 50 (see `shared/reference/README.md`, item 4):
+/// PCwF faces j = 0…N−1; SFCl the `+mz` group then the `−mz` group; SFCe the upper
+/// hemisphere (latitude outer, longitude inner) then the lower; `fz ≥ 0` last.
+pub fn inscribed_cone(model: &ContactModel, lin: &Linearization) -> InscribedCone {
+    let n = lin.sides;
+    let theta = |j: usize| 2.0 * PI * (j % n) as f64 / n as f64;
+    match *model {
+        ContactModel::Fpc => InscribedCone {
+            faces: Matrix::from_rows(&[vec![1.0]], 1),
+            vertices: vec![vec![1.0]],
+        },
+        ContactModel::Pcwf { mu } => {
+            let ring: Vec<[f64; 2]> = (0..n)
+                .map(|j| [mu * theta(j).cos(), mu * theta(j).sin()])
+                .collect();
+            let mut rows: Vec<Vec<f64>> = (0..n)
+                .map(|j| edge_row(ring[j], ring[(j + 1) % n]))
+                .collect();
+            rows.push(vec![0.0, 0.0, 1.0]);
+            InscribedCone {
+                faces: Matrix::from_rows(&rows, 3),
+                vertices: ring.iter().map(|p| vec![p[0], p[1], 1.0]).collect(),
+            }
+        }
+        ContactModel::SfcLinear { mu, mu_torsion } => {
+            let ring: Vec<[f64; 3]> = (0..n)
+                .map(|j| [mu * theta(j).cos(), mu * theta(j).sin(), 0.0])
+                .collect();
+            let mut rows = Vec::with_capacity(2 * n + 1);
+            for pole in [mu_torsion, -mu_torsion] {
+                for j in 0..n {
+                    rows.push(face_row(ring[j], ring[(j + 1) % n], [0.0, 0.0, pole]));
+                }
+            }
+            rows.push(vec![0.0, 0.0, 1.0, 0.0]);
+            let mut vertices: Vec<Vec<f64>> =
+                ring.iter().map(|p| vec![p[0], p[1], 1.0, 0.0]).collect();
+            vertices.push(vec![0.0, 0.0, 1.0, mu_torsion]);
+            vertices.push(vec![0.0, 0.0, 1.0, -mu_torsion]);
+            InscribedCone {
+                faces: Matrix::from_rows(&rows, 4),
+                vertices,
+            }
+        }
+        ContactModel::SfcElliptic { mu, mu_torsion } => {
+            sfce_cone(mu, mu_torsion, lin.sides, lin.latitudes, lin.sfce_spacing)
+        }
+    }
+}
+
+/// The SFCe ellipsoidal polyhedron (eqs. 13–17), built from its vertices.
+fn sfce_cone(mu: f64, mu_t: f64, n: usize, k: usize, spacing: SfceSpacing) -> InscribedCone {
+    // (radius, |mz|) of latitude i = 0..=k in the fz = 1 slice; i = k is the pole.
+    let lat: Vec<(f64, f64)> = (0..=k)
+        .map(|i| {
+            if i == k {
+                return (0.0, mu_t);
+            }
+            let angle = PI * i as f64 / (2 * k) as f64;
+            match spacing {
+                SfceSpacing::Paper => {
+                    // eq. 13: l_i = mu·mu_t/√(mu²·tan²ψ + mu_t²), vertex (l cos θ, l sin θ, l tan ψ).
+                    let t = angle.tan();
+                    let l = mu * mu_t / (mu * mu * t * t + mu_t * mu_t).sqrt();
+                    (l, l * t)
+                }
+                SfceSpacing::Uniform => (mu * angle.cos(), mu_t * angle.sin()),
+            }
+        })
+        .collect();
+    let theta = |j: usize| 2.0 * PI * (j % n) as f64 / n as f64;
+    let point = |i: usize, j: usize, sign: f64| {
+        let (r, z) = lat[i];
+        [r * theta(j).cos(), r * theta(j).sin(), sign * z]
+    };
+    let mut rows = Vec::with_capacity(2 * n * k + 1);
+    for sign in [1.0, -1.0] {
+        for i in 0..k {
+            for j in 0..n {
+                // Quad (i,j),(i,j+1),(i+1,j+1),(i+1,j) is an isosceles trapezoid, hence
+                // planar; at i+1 = k it degenerates to the pole triangle. Three of its
+                // corners define the plane; pick ones that are distinct.
+                let a = point(i, j, sign);
+                let b = point(i, j + 1, sign);
+                let c = if i + 1 == k {
+                    point(k, 0, sign)
+                } else {
+                    point(i + 1, j, sign)
+                };
+                rows.push(face_row(a, b, c));
+            }
+        }
+    }
+    rows.push(vec![0.0, 0.0, 1.0, 0.0]);
+    let mut vertices = Vec::with_capacity(2 * n * (k - 1) + n + 2);
+    for sign in [1.0, -1.0] {
+        for i in 0..k {
+            if i == 0 && sign < 0.0 {
+                continue; // the equator is shared by both hemispheres
+            }
+            for j in 0..n {
+                let p = point(i, j, sign);
+                vertices.push(vec![p[0], p[1], 1.0, p[2]]);
+            }
+        }
+        vertices.push(vec![0.0, 0.0, 1.0, sign * mu_t]);
+    }
+    InscribedCone {
+        faces: Matrix::from_rows(&rows, 4),
+        vertices,
+    }
+}
+
+/// PCwF face through two neighbouring polygon vertices `p`, `q` of the `fz = 1` slice:
+/// the line `n·x = d` with the origin inside (`d > 0`) gives `fz − (n/d)·(fx, fy) ≥ 0`.
+fn edge_row(p: [f64; 2], q: [f64; 2]) -> Vec<f64> {
+    let nrm = [q[1] - p[1], p[0] - q[0]];
+    let d = nrm[0] * p[0] + nrm[1] * p[1];
+    vec![-nrm[0] / d, -nrm[1] / d, 1.0]
+}
+
+/// Soft-finger face through three vertices of the `fz = 1` slice, in `(fx, fy, mz)`:
+/// the plane `n·x = d` (cross product) with the origin inside gives
+/// `fz − (n/d)·(fx, fy, mz) ≥ 0`, laid out as `[fx fy fz mz]`.
+fn face_row(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Vec<f64> {
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let nrm = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    let d = nrm[0] * a[0] + nrm[1] * a[1] + nrm[2] * a[2];
+    vec![-nrm[0] / d, -nrm[1] / d, 1.0, -nrm[2] / d]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lin(sides: usize, latitudes: usize, sfce_spacing: SfceSpacing) -> Linearization {
+        Linearization {
+            sides,
+            latitudes,
+            sfce_spacing,
+        }
+    }
+
+    const MODELS: [ContactModel; 4] = [
+        ContactModel::Fpc,
+        ContactModel::Pcwf { mu: 0.6 },
+        ContactModel::SfcLinear {
+            mu: 0.5,
+            mu_torsion: 0.01,
+        },
+        ContactModel::SfcElliptic {
+            mu: 0.7,
+            mu_torsion: 0.02,
+        },
+    ];
+
+    #[test]
+    fn row_counts_match_the_paper() {
+        for (n, k) in [(3, 1), (4, 2), (8, 3), (17, 5)] {
+            for s in [SfceSpacing::Paper, SfceSpacing::Uniform] {
+                let l = lin(n, k, s);
+                for m in MODELS {
+                    let cone = inscribed_cone(&m, &l);
+                    assert_eq!(cone.faces.nrows(), l.rows_for(&m));
+                    assert_eq!(cone.faces.ncols(), m.dim());
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn vertices_lie_on_the_exact_cone_and_on_the_polytope() {
+        for (n, k) in [(3, 1), (4, 2), (8, 3), (16, 4)] {
+            for s in [SfceSpacing::Paper, SfceSpacing::Uniform] {
+                for m in MODELS.iter().skip(1) {
+                    let cone = inscribed_cone(m, &lin(n, k, s));
+                    for v in &cone.vertices {
+                        assert!(m.exact_margin(v).abs() < 1e-12, "{m:?} {v:?}");
+                        let vals = cone.faces.mul_vec(v);
+                        assert!(vals.iter().all(|&x| x > -1e-12), "{m:?} {vals:?}");
+                        // A vertex of the polytope touches at least three faces (two for PCwF).
+                        let touching = vals.iter().filter(|x| x.abs() < 1e-12).count();
+                        assert!(touching >= m.dim() - 1, "{m:?} {v:?} {touching}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn paper_s1_is_reproduced_up_to_row_scale() {
+        // eq. 50, N = 4, mu = 0.5, mu_torsion = 0.2; our rows have fz coefficient 1,
+        // the paper's 0.1.
+        let s1 = [
+            [-0.2, -0.2, 0.1, -0.5],
+            [0.2, -0.2, 0.1, -0.5],
+            [0.2, 0.2, 0.1, -0.5],
+            [-0.2, 0.2, 0.1, -0.5],
+            [-0.2, -0.2, 0.1, 0.5],
+            [0.2, -0.2, 0.1, 0.5],
+            [0.2, 0.2, 0.1, 0.5],
+            [-0.2, 0.2, 0.1, 0.5],
+            [0.0, 0.0, 1.0, 0.0],
+        ];
+        let m = ContactModel::SfcLinear {
+            mu: 0.5,
+            mu_torsion: 0.2,
+        };
+        let cone = inscribed_cone(&m, &lin(4, 2, SfceSpacing::Paper));
+        for (i, printed) in s1.iter().enumerate() {
+            let scale = printed[2];
+            for (j, &p) in printed.iter().enumerate() {
+                assert!(
+                    (cone.faces[(i, j)] * scale - p).abs() < 1e-12,
+                    "row {i}: {:?} vs {printed:?}",
+                    cone.faces.row(i)
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn pcwf_faces_match_the_closed_form() {
+        // shared/reference README: fx cos φj + fy sin φj ≤ mu cos(π/N) fz, φj = (2j+1)π/N.
+        let (mu, n) = (0.6, 7);
+        let cone = inscribed_cone(&ContactModel::Pcwf { mu }, &lin(n, 1, SfceSpacing::Paper));
+        for j in 0..n {
+            let phi = (2 * j + 1) as f64 * PI / n as f64;
+            let k = mu * (PI / n as f64).cos();
+            let row = cone.faces.row(j);
+            assert!((row[0] + phi.cos() / k).abs() < 1e-12);
+            assert!((row[1] + phi.sin() / k).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn settings_are_validated() {
+        assert!(lin(2, 1, SfceSpacing::Paper).validate().is_err());
+        assert!(lin(MAX_SIDES + 1, 1, SfceSpacing::Paper).validate().is_err());
+        assert!(lin(4, 0, SfceSpacing::Paper).validate().is_err());
+        assert!(Linearization::default().validate().is_ok());
+    }
+}

@@ -1,0 +1,146 @@
+//! Contact models (paper section 2.1, eqs. 1–4) and their exact friction cones.
+
+/// How a fingertip touches the object, with its friction coefficients.
+///
+/// The force layout in the contact frame (z along the inward normal) is
+/// `[fz]` for [`ContactModel::Fpc`], `[fx fy fz]` for [`ContactModel::Pcwf`] and
+/// `[fx fy fz mz]` for the soft-finger models.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ContactModel {
+    /// Frictionless point contact, eq. 1: `fz ≥ 0`.
+    Fpc,
+    /// Point contact with friction, eq. 2: `‖(fx, fy)‖ ≤ mu·fz`.
+    Pcwf {
+        /// Tangential (Coulomb) friction coefficient, dimensionless.
+        mu: f64,
+    },
+    /// Soft finger, linear coupling, eq. 3: `‖(fx, fy)‖/mu + |mz|/mu_torsion ≤ fz`.
+    SfcLinear {
+        /// Tangential friction coefficient, dimensionless.
+        mu: f64,
+        /// Torsional friction coefficient, a length (metres when forces are in newtons
+        /// and moments in newton-metres).
+        mu_torsion: f64,
+    },
+    /// Soft finger, elliptic coupling, eq. 4: `√(‖(fx, fy)‖²/mu² + mz²/mu_torsion²) ≤ fz`.
+    SfcElliptic {
+        /// Tangential friction coefficient, dimensionless.
+        mu: f64,
+        /// Torsional friction coefficient, a length.
+        mu_torsion: f64,
+    },
+}
+
+/// A contact model with an unusable coefficient.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{field} must be a finite number > 0, got {value}")]
+pub struct ContactError {
+    /// `"mu"` or `"mu_torsion"`.
+    pub field: &'static str,
+    /// The rejected value.
+    pub value: f64,
+}
+
+impl ContactModel {
+    /// Number of force components: 1, 3 or 4.
+    pub fn dim(&self) -> usize {
+        match self {
+            Self::Fpc => 1,
+            Self::Pcwf { .. } => 3,
+            Self::SfcLinear { .. } | Self::SfcElliptic { .. } => 4,
+        }
+    }
+
+    /// Index of `fz` within the contact's force components.
+    pub fn normal_index(&self) -> usize {
+        match self {
+            Self::Fpc => 0,
+            _ => 2,
+        }
+    }
+
+    /// The name used in problem files: `fpc`, `pcwf`, `sfcl` or `sfce`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Fpc => "fpc",
+            Self::Pcwf { .. } => "pcwf",
+            Self::SfcLinear { .. } => "sfcl",
+            Self::SfcElliptic { .. } => "sfce",
+        }
+    }
+
+    /// Checks that every coefficient is finite and positive.
+    pub fn validate(&self) -> Result<(), ContactError> {
+        let check = |field, value: f64| {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(ContactError { field, value })
+            }
+        };
+        match *self {
+            Self::Fpc => Ok(()),
+            Self::Pcwf { mu } => check("mu", mu),
+            Self::SfcLinear { mu, mu_torsion } | Self::SfcElliptic { mu, mu_torsion } => {
+                check("mu", mu)?;
+                check("mu_torsion", mu_torsion)
+            }
+        }
+    }
+
+    /// The cone's gauge `g(f)`: the exact cone is `g(f) ≤ fz` (eqs. 1–4).
+    pub fn gauge(&self, f: &[f64]) -> f64 {
+        match *self {
+            Self::Fpc => 0.0,
+            Self::Pcwf { mu } => f[0].hypot(f[1]) / mu,
+            Self::SfcLinear { mu, mu_torsion } => f[0].hypot(f[1]) / mu + f[3].abs() / mu_torsion,
+            Self::SfcElliptic { mu, mu_torsion } => {
+                (f[0].hypot(f[1]) / mu).hypot(f[3] / mu_torsion)
+            }
+        }
+    }
+
+    /// Scale-free margin to the exact cone: `(fz − g)/max(|fz|, g)`.
+    ///
+    /// 1 is a pure normal push, 0 is on the cone surface (or no force at all), and a
+    /// negative value is outside the cone (down to −1). Multiplying the force by a
+    /// positive factor leaves it unchanged.
+    pub fn exact_margin(&self, f: &[f64]) -> f64 {
+        let fz = f[self.normal_index()];
+        let g = self.gauge(f);
+        let den = fz.abs().max(g);
+        if den == 0.0 {
+            0.0
+        } else {
+            (fz - g) / den
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn margins_are_scale_free_and_signed() {
+        let c = ContactModel::Pcwf { mu: 0.5 };
+        assert_eq!(c.exact_margin(&[0.0, 0.0, 2.0]), 1.0);
+        assert!(c.exact_margin(&[0.5, 0.0, 1.0]).abs() < 1e-15);
+        assert!(c.exact_margin(&[1.0, 0.0, 1.0]) < 0.0);
+        let a = c.exact_margin(&[0.1, 0.2, 1.0]);
+        let b = c.exact_margin(&[10.0, 20.0, 100.0]);
+        assert!((a - b).abs() < 1e-15);
+        assert_eq!(ContactModel::Fpc.exact_margin(&[-3.0]), -1.0);
+    }
+
+    #[test]
+    fn validation_rejects_bad_coefficients() {
+        assert!(ContactModel::Pcwf { mu: 0.0 }.validate().is_err());
+        assert!(ContactModel::SfcLinear { mu: 0.5, mu_torsion: f64::NAN }
+            .validate()
+            .is_err());
+        assert!(ContactModel::SfcElliptic { mu: 0.5, mu_torsion: 0.01 }
+            .validate()
+            .is_ok());
+    }
+}

@@ -1,0 +1,66 @@
+//! Errors for problems that cannot be set up ("could not start").
+//!
+//! A grasp that is set up but has no admissible torque is not an error: it is a
+//! [`crate::Status::Infeasible`] answer.
+
+/// A problem description that cannot be used, naming the field at fault.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ProblemError {
+    /// The file could not be read.
+    #[error("could not read {path}: {source}")]
+    Io {
+        /// The path given.
+        path: String,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The text is not JSON of the expected shape.
+    #[error("{}{message} (line {line}, column {column})", if path.is_empty() || path == "." { String::new() } else { format!("{path}: ") })]
+    Parse {
+        /// Where in the document, such as `contacts[1].mu` (`.` for the top level).
+        path: String,
+        /// What serde expected and found.
+        message: String,
+        /// 1-based line of the error.
+        line: usize,
+        /// 1-based column of the error.
+        column: usize,
+    },
+    /// A field has a value the model cannot use.
+    #[error("{field}: expected {expected}, got {found}")]
+    Invalid {
+        /// Where in the document, such as `torque_limits[2]`.
+        field: String,
+        /// What a valid value looks like.
+        expected: String,
+        /// What was given.
+        found: String,
+    },
+}
+
+impl ProblemError {
+    pub(crate) fn invalid(
+        field: impl Into<String>,
+        expected: impl Into<String>,
+        found: impl std::fmt::Display,
+    ) -> Self {
+        Self::Invalid {
+            field: field.into(),
+            expected: expected.into(),
+            found: found.to_string(),
+        }
+    }
+}
+
+/// A grasp model that could not be assembled from a valid problem.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ModelError {
+    /// A decomposition failed to converge.
+    #[error(transparent)]
+    Svd(#[from] crate::linalg::SvdError),
+    /// The rank tolerance is not in `(0, 1)`.
+    #[error("rank_tolerance must be in (0, 1), got {0}")]
+    RankTolerance(f64),
+}

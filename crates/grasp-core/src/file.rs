@@ -1,0 +1,296 @@
+//! Problem files: JSON, read with serde; unknown fields are rejected.
+//!
+//! Errors name the field (`contacts[1].mu`) and what was expected, or the JSON line and
+//! column when the text is not well-formed.
+
+use crate::cone::Linearization;
+use crate::contact::ContactModel;
+use crate::error::ProblemError;
+use crate::matrix::Matrix;
+use crate::problem::GraspProblem;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The contact model names of problem files.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ModelName {
+    /// Frictionless point contact.
+    Fpc,
+    /// Point contact with friction.
+    Pcwf,
+    /// Soft finger, linear coupling.
+    Sfcl,
+    /// Soft finger, elliptic coupling.
+    Sfce,
+}
+
+/// One entry of `contacts` in a matrix-form file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// `fpc`, `pcwf`, `sfcl` or `sfce`.
+    pub model: ModelName,
+    /// Tangential friction coefficient (all but `fpc`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu: Option<f64>,
+    /// Torsional friction coefficient, a length (`sfcl`, `sfce`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu_torsion: Option<f64>,
+}
+
+impl ContactSpec {
+    /// Converts to a model, naming `field` (such as `contacts[2]`) in errors.
+    pub fn to_model(&self, field: &str) -> Result<ContactModel, ProblemError> {
+        let name = match self.model {
+            ModelName::Fpc => "fpc",
+            ModelName::Pcwf => "pcwf",
+            ModelName::Sfcl => "sfcl",
+            ModelName::Sfce => "sfce",
+        };
+        let need = |v: Option<f64>, what: &str| {
+            v.ok_or_else(|| {
+                ProblemError::invalid(
+                    format!("{field}.{what}"),
+                    format!("a number > 0 (model {name} needs it)"),
+                    "nothing",
+                )
+            })
+        };
+        let unused = |v: Option<f64>, what: &str| match v {
+            Some(x) => Err(ProblemError::invalid(
+                format!("{field}.{what}"),
+                format!("no {what} for model {name}, which does not use it"),
+                x,
+            )),
+            None => Ok(()),
+        };
+        let model = match self.model {
+            ModelName::Fpc => {
+                unused(self.mu, "mu")?;
+                unused(self.mu_torsion, "mu_torsion")?;
+                ContactModel::Fpc
+            }
+            ModelName::Pcwf => {
+                unused(self.mu_torsion, "mu_torsion")?;
+                ContactModel::Pcwf { mu: need(self.mu, "mu")? }
+            }
+            ModelName::Sfcl => ContactModel::SfcLinear {
+                mu: need(self.mu, "mu")?,
+                mu_torsion: need(self.mu_torsion, "mu_torsion")?,
+            },
+            ModelName::Sfce => ContactModel::SfcElliptic {
+                mu: need(self.mu, "mu")?,
+                mu_torsion: need(self.mu_torsion, "mu_torsion")?,
+            },
+        };
+        model.validate().map_err(|e| {
+            ProblemError::invalid(format!("{field}.{}", e.field), "a finite number > 0", e.value)
+        })?;
+        Ok(model)
+    }
+}
+
+impl From<&ContactModel> for ContactSpec {
+    fn from(m: &ContactModel) -> Self {
+        match *m {
+            ContactModel::Fpc => Self { model: ModelName::Fpc, mu: None, mu_torsion: None },
+            ContactModel::Pcwf { mu } => Self { model: ModelName::Pcwf, mu: Some(mu), mu_torsion: None },
+            ContactModel::SfcLinear { mu, mu_torsion } => Self {
+                model: ModelName::Sfcl,
+                mu: Some(mu),
+                mu_torsion: Some(mu_torsion),
+            },
+            ContactModel::SfcElliptic { mu, mu_torsion } => Self {
+                model: ModelName::Sfce,
+                mu: Some(mu),
+                mu_torsion: Some(mu_torsion),
+            },
+        }
+    }
+}
+
+/// Optional fields shared by both file forms (listed inline in each form's struct,
+/// because serde cannot reject unknown fields through `flatten`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Options {
+    /// N (`sides`, default 8), K (`latitudes`, default 2) and `sfce_spacing`.
+    pub linearization: Option<Linearization>,
+    /// Objective weights, one per joint (> 0).
+    pub torque_weights: Option<Vec<f64>>,
+    /// `|τ_j| ≤ limit`, one per joint; `null` for no limit.
+    pub torque_limits: Option<Vec<Option<f64>>>,
+    /// `fz ≥ value`: one number for every contact, or a list with one per contact.
+    pub min_normal_force: Option<serde_json::Value>,
+    /// A starting torque, one per joint.
+    pub initial_torque: Option<Vec<f64>>,
+}
+
+/// A problem file in matrix form.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MatrixFile {
+    /// Free-text name, for reports.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Free-text description: where the numbers come from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// G, 6 rows × n.
+    pub grasp_matrix: Vec<Vec<f64>>,
+    /// Jᵀ, m rows × n.
+    pub jacobian_transpose: Vec<Vec<f64>>,
+    /// `[Fx Fy Fz Mx My Mz]`.
+    pub wrench: Vec<f64>,
+    /// One entry per contact, in column order.
+    pub contacts: Vec<ContactSpec>,
+    /// N (`sides`, default 8), K (`latitudes`, default 2) and `sfce_spacing`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub linearization: Option<Linearization>,
+    /// Objective weights, one per joint (> 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torque_weights: Option<Vec<f64>>,
+    /// `|τ_j| ≤ limit`, one per joint; `null` for no limit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torque_limits: Option<Vec<Option<f64>>>,
+    /// `fz ≥ value`: one number for every contact, or a list with one per contact.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_normal_force: Option<serde_json::Value>,
+    /// A starting torque, one per joint.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_torque: Option<Vec<f64>>,
+}
+
+impl MatrixFile {
+    /// The matrix-form file of a problem (what `grasp-torque build` prints).
+    pub fn from_problem(p: &GraspProblem, name: Option<String>) -> Self {
+        Self {
+            name,
+            description: None,
+            grasp_matrix: p.grasp_matrix.to_rows(),
+            jacobian_transpose: p.jacobian_transpose.to_rows(),
+            wrench: p.wrench.to_vec(),
+            contacts: p.contacts.iter().map(ContactSpec::from).collect(),
+            linearization: Some(p.linearization),
+            torque_weights: p.torque_weights.clone(),
+            torque_limits: p.torque_limits.clone(),
+            min_normal_force: p.min_normal_force.as_ref().map(|v| serde_json::json!(v)),
+            initial_torque: p.initial_torque.clone(),
+        }
+    }
+
+    /// Converts to a validated problem.
+    pub fn into_problem(self) -> Result<GraspProblem, ProblemError> {
+        let g = rectangular("grasp_matrix", &self.grasp_matrix)?;
+        let jt = rectangular("jacobian_transpose", &self.jacobian_transpose)?;
+        let wrench = wrench6(&self.wrench)?;
+        let contacts = self
+            .contacts
+            .iter()
+            .enumerate()
+            .map(|(i, c)| c.to_model(&format!("contacts[{i}]")))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut p = GraspProblem::new(g, jt, wrench, contacts);
+        Options {
+            linearization: self.linearization,
+            torque_weights: self.torque_weights,
+            torque_limits: self.torque_limits,
+            min_normal_force: self.min_normal_force,
+            initial_torque: self.initial_torque,
+        }
+        .apply(&mut p)?;
+        p.validate()?;
+        Ok(p)
+    }
+}
+
+impl Options {
+    /// Copies the options into `p`, expanding a scalar `min_normal_force`.
+    pub fn apply(self, p: &mut GraspProblem) -> Result<(), ProblemError> {
+        if let Some(l) = self.linearization {
+            p.linearization = l;
+        }
+        p.torque_weights = self.torque_weights;
+        p.torque_limits = self.torque_limits;
+        p.initial_torque = self.initial_torque;
+        p.min_normal_force = match self.min_normal_force {
+            None | Some(serde_json::Value::Null) => None,
+            Some(serde_json::Value::Number(x)) => {
+                Some(vec![x.as_f64().unwrap_or(f64::NAN); p.contacts.len()])
+            }
+            Some(serde_json::Value::Array(a)) => Some(
+                a.iter()
+                    .enumerate()
+                    .map(|(i, v)| {
+                        v.as_f64().ok_or_else(|| {
+                            ProblemError::invalid(format!("min_normal_force[{i}]"), "a number ≥ 0", v)
+                        })
+                    })
+                    .collect::<Result<_, _>>()?,
+            ),
+            Some(other) => {
+                return Err(ProblemError::invalid(
+                    "min_normal_force",
+                    "a number ≥ 0, or a list with one number ≥ 0 per contact",
+                    other,
+                ))
+            }
+        };
+        Ok(())
+    }
+}
+
+pub(crate) fn wrench6(w: &[f64]) -> Result<[f64; 6], ProblemError> {
+    w.try_into().map_err(|_| {
+        ProblemError::invalid(
+            "wrench",
+            "6 numbers [Fx, Fy, Fz, Mx, My, Mz]",
+            format!("{} numbers", w.len()),
+        )
+    })
+}
+
+fn rectangular(name: &str, rows: &[Vec<f64>]) -> Result<Matrix, ProblemError> {
+    let cols = rows.first().map_or(0, Vec::len);
+    if let Some((i, r)) = rows.iter().enumerate().find(|(_, r)| r.len() != cols) {
+        return Err(ProblemError::invalid(
+            format!("{name}[{i}]"),
+            format!("{cols} entries, like row 0"),
+            format!("{} entries", r.len()),
+        ));
+    }
+    Ok(Matrix::from_rows(rows, cols))
+}
+
+/// Deserialises `T` from JSON text, reporting the path of the field at fault.
+pub fn from_json_str<'de, T: Deserialize<'de>>(text: &'de str) -> Result<T, ProblemError> {
+    let de = &mut serde_json::Deserializer::from_str(text);
+    let value = serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner();
+        let (line, column) = (inner.line(), inner.column());
+        let message = inner.to_string();
+        // serde_json appends " at line L column C"; the variant carries them already.
+        let message = match message.rfind(" at line ") {
+            Some(i) => message[..i].to_string(),
+            None => message,
+        };
+        ProblemError::Parse { path, message, line, column }
+    })?;
+    Ok(value)
+}
+
+/// Parses a problem file's text (matrix form).
+pub fn parse_problem(text: &str) -> Result<GraspProblem, ProblemError> {
+    from_json_str::<MatrixFile>(text)?.into_problem()
+}
+
+/// Reads and parses a problem file.
+pub fn load_problem(path: impl AsRef<Path>) -> Result<GraspProblem, ProblemError> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|source| ProblemError::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
+    parse_problem(&text)
+}

@@ -1,0 +1,199 @@
+//! A grasp-torque problem in matrix form, as the paper states it (section 5).
+
+use crate::cone::Linearization;
+use crate::contact::ContactModel;
+use crate::error::ProblemError;
+use crate::matrix::Matrix;
+
+/// Everything that defines one grasp-torque problem.
+///
+/// `G f = w` must hold for the contact forces `f` (n components, contacts in column
+/// order), `Jᵀ f = τ` maps them to the m joint torques, and each contact's force must lie
+/// in its (linearised) friction cone.
+#[derive(Clone, Debug)]
+pub struct GraspProblem {
+    /// G, the 6 × n grasp matrix (eq. 18).
+    pub grasp_matrix: Matrix,
+    /// Jᵀ, the m × n transposed hand Jacobian (eq. 19).
+    pub jacobian_transpose: Matrix,
+    /// w = `[Fx Fy Fz Mx My Mz]`, the wrench the contact forces must apply to the object.
+    pub wrench: [f64; 6],
+    /// The contacts, in the column order of G.
+    pub contacts: Vec<ContactModel>,
+    /// N and K of the inscribed cones.
+    pub linearization: Linearization,
+    /// Objective weights `w_j` in `Σ w_j τ_j²`; `None` means all 1.
+    pub torque_weights: Option<Vec<f64>>,
+    /// Symmetric limits `|τ_j| ≤ τmax_j`; `None` entries are unlimited.
+    pub torque_limits: Option<Vec<Option<f64>>>,
+    /// Minimum normal force per contact, `fz ≥ f_min` (same unit as f); `None` means 0.
+    pub min_normal_force: Option<Vec<f64>>,
+    /// A starting torque for the solver (used when feasible).
+    pub initial_torque: Option<Vec<f64>>,
+}
+
+impl GraspProblem {
+    /// A problem with default options: uniform weights, no limits, no minimum force.
+    pub fn new(
+        grasp_matrix: Matrix,
+        jacobian_transpose: Matrix,
+        wrench: [f64; 6],
+        contacts: Vec<ContactModel>,
+    ) -> Self {
+        Self {
+            grasp_matrix,
+            jacobian_transpose,
+            wrench,
+            contacts,
+            linearization: Linearization::default(),
+            torque_weights: None,
+            torque_limits: None,
+            min_normal_force: None,
+            initial_torque: None,
+        }
+    }
+
+    /// Number of joints m.
+    pub fn joints(&self) -> usize {
+        self.jacobian_transpose.nrows()
+    }
+
+    /// Number of contact force components n.
+    pub fn force_dim(&self) -> usize {
+        self.grasp_matrix.ncols()
+    }
+
+    /// Checks every dimension and value, naming the first field at fault.
+    pub fn validate(&self) -> Result<(), ProblemError> {
+        let g = &self.grasp_matrix;
+        if g.nrows() != 6 {
+            return Err(ProblemError::invalid(
+                "grasp_matrix",
+                "6 rows (Fx Fy Fz Mx My Mz)",
+                format!("{} rows", g.nrows()),
+            ));
+        }
+        let n = g.ncols();
+        if n == 0 {
+            return Err(ProblemError::invalid("grasp_matrix", "at least one column", "none"));
+        }
+        finite_matrix("grasp_matrix", g)?;
+        if self.contacts.is_empty() {
+            return Err(ProblemError::invalid("contacts", "at least one contact", "an empty list"));
+        }
+        for (i, c) in self.contacts.iter().enumerate() {
+            c.validate().map_err(|e| {
+                ProblemError::invalid(
+                    format!("contacts[{i}].{}", e.field),
+                    "a finite number > 0",
+                    e.value,
+                )
+            })?;
+        }
+        let dims: usize = self.contacts.iter().map(ContactModel::dim).sum();
+        if dims != n {
+            return Err(ProblemError::invalid(
+                "contacts",
+                format!("models whose force components add up to the {n} columns of grasp_matrix (fpc 1, pcwf 3, sfcl/sfce 4)"),
+                format!("{dims} components"),
+            ));
+        }
+        let jt = &self.jacobian_transpose;
+        if jt.nrows() == 0 {
+            return Err(ProblemError::invalid("jacobian_transpose", "at least one joint row", "none"));
+        }
+        if jt.ncols() != n {
+            return Err(ProblemError::invalid(
+                "jacobian_transpose",
+                format!("rows of {n} entries (the columns of grasp_matrix)"),
+                format!("rows of {}", jt.ncols()),
+            ));
+        }
+        finite_matrix("jacobian_transpose", jt)?;
+        for (j, v) in self.wrench.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(ProblemError::invalid(format!("wrench[{j}]"), "a finite number", v));
+            }
+        }
+        self.linearization
+            .validate()
+            .map_err(|e| ProblemError::invalid("linearization", "valid N and K", e))?;
+        let m = jt.nrows();
+        if let Some(w) = &self.torque_weights {
+            per_joint("torque_weights", w.len(), m)?;
+            for (j, &v) in w.iter().enumerate() {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(ProblemError::invalid(
+                        format!("torque_weights[{j}]"),
+                        "a finite number > 0",
+                        v,
+                    ));
+                }
+            }
+        }
+        if let Some(l) = &self.torque_limits {
+            per_joint("torque_limits", l.len(), m)?;
+            for (j, v) in l.iter().enumerate() {
+                if let Some(v) = *v {
+                    if !(v.is_finite() && v > 0.0) {
+                        return Err(ProblemError::invalid(
+                            format!("torque_limits[{j}]"),
+                            "a finite number > 0, or null for no limit",
+                            v,
+                        ));
+                    }
+                }
+            }
+        }
+        if let Some(f) = &self.min_normal_force {
+            if f.len() != self.contacts.len() {
+                return Err(ProblemError::invalid(
+                    "min_normal_force",
+                    format!("one value per contact ({})", self.contacts.len()),
+                    format!("{} values", f.len()),
+                ));
+            }
+            for (i, &v) in f.iter().enumerate() {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(ProblemError::invalid(
+                        format!("min_normal_force[{i}]"),
+                        "a finite number ≥ 0",
+                        v,
+                    ));
+                }
+            }
+        }
+        if let Some(t) = &self.initial_torque {
+            per_joint("initial_torque", t.len(), m)?;
+            for (j, v) in t.iter().enumerate() {
+                if !v.is_finite() {
+                    return Err(ProblemError::invalid(format!("initial_torque[{j}]"), "a finite number", v));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn finite_matrix(name: &str, a: &Matrix) -> Result<(), ProblemError> {
+    for i in 0..a.nrows() {
+        for (j, v) in a.row(i).iter().enumerate() {
+            if !v.is_finite() {
+                return Err(ProblemError::invalid(format!("{name}[{i}][{j}]"), "a finite number", v));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn per_joint(name: &str, len: usize, m: usize) -> Result<(), ProblemError> {
+    if len == m {
+        Ok(())
+    } else {
+        Err(ProblemError::invalid(
+            name,
+            format!("one value per joint ({m}, the rows of jacobian_transpose)"),
+            format!("{len} values"),
+        ))
+    }
+}
