@@ -1,1 +1,110 @@
-//! placeholder
+#![doc = include_str!("../README.md")]
+
+pub use grasp_core::*;
+
+#[cfg(feature = "active-set")]
+pub use grasp_active_set::{ActiveSetSettings, ActiveSetSolver};
+#[cfg(feature = "clarabel")]
+pub use grasp_clarabel::{ClarabelSettings, ClarabelSolver};
+
+mod backend;
+pub use backend::{Backend, BackendError, Cones, SolverConfig};
+
+/// Anything that stops a problem from being set up.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The problem description is invalid.
+    #[error(transparent)]
+    Problem(#[from] ProblemError),
+    /// The QP could not be assembled.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// The backend is unavailable or rejected its settings.
+    #[error(transparent)]
+    Backend(#[from] BackendError),
+    /// A wrench or warm start does not fit the problem.
+    #[error(transparent)]
+    WarmStart(#[from] WarmStartError),
+}
+
+/// A solver for one grasp, reused across wrenches: it keeps the backend's workspace,
+/// the last solution's buffers and a copy of the last answer for warm starts, so a
+/// solve with a new wrench allocates nothing once warmed up.
+pub struct GraspSolver {
+    backend: Box<dyn TorqueSolver>,
+    solution: Solution,
+    last_torque: Vec<f64>,
+    last_active: Vec<usize>,
+    has_last: bool,
+}
+
+impl GraspSolver {
+    /// Validates the problem, assembles its QP and builds the configured backend.
+    pub fn new(problem: &GraspProblem, config: &SolverConfig) -> Result<Self, Error> {
+        problem.validate()?;
+        let qp = TorqueQp::new(problem, &config.model)?;
+        Ok(Self::from_backend(config.build(qp)?))
+    }
+
+    /// Wraps an already built backend.
+    pub fn from_backend(backend: Box<dyn TorqueSolver>) -> Self {
+        Self {
+            backend,
+            solution: Solution::default(),
+            last_torque: Vec::new(),
+            last_active: Vec::new(),
+            has_last: false,
+        }
+    }
+
+    /// The assembled QP.
+    pub fn problem(&self) -> &TorqueQp {
+        self.backend.problem()
+    }
+
+    /// The backend's name.
+    pub fn backend_name(&self) -> &'static str {
+        self.backend.name()
+    }
+
+    /// Solves for `wrench` from `warm`.
+    pub fn solve(&mut self, wrench: &[f64; 6], warm: &WarmStart<'_>) -> Result<&Solution, Error> {
+        solve_into(self.backend.as_mut(), wrench, warm, &mut self.solution)?;
+        self.remember();
+        Ok(&self.solution)
+    }
+
+    /// Solves for `wrench`, warm-started from the previous optimal answer if there is one
+    /// (its torque and key constraint set): the control-loop call.
+    pub fn resolve(&mut self, wrench: &[f64; 6]) -> Result<&Solution, Error> {
+        let warm = if self.has_last {
+            WarmStart {
+                torque: Some(&self.last_torque),
+                active_set: Some(&self.last_active),
+            }
+        } else {
+            WarmStart::default()
+        };
+        solve_into(self.backend.as_mut(), wrench, &warm, &mut self.solution)?;
+        self.remember();
+        Ok(&self.solution)
+    }
+
+    /// The last solution.
+    pub fn solution(&self) -> &Solution {
+        &self.solution
+    }
+
+    fn remember(&mut self) {
+        self.has_last = self.solution.is_optimal();
+        if self.has_last {
+            self.last_torque.clear();
+            self.last_torque.extend_from_slice(&self.solution.torque);
+            self.last_active.clear();
+            if let Some(a) = &self.solution.active_set {
+                self.last_active.extend_from_slice(a);
+            }
+        }
+    }
+}

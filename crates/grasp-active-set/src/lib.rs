@@ -80,17 +80,26 @@ impl ActiveSetSettings {
             if v.is_finite() && v > 0.0 && v < 1.0 {
                 Ok(())
             } else {
-                Err(SettingsError { field, expected: "a number in (0, 1)" })
+                Err(SettingsError {
+                    field,
+                    expected: "a number in (0, 1)",
+                })
             }
         };
         if self.max_iterations == 0 {
-            return Err(SettingsError { field: "max_iterations", expected: "at least 1" });
+            return Err(SettingsError {
+                field: "max_iterations",
+                expected: "at least 1",
+            });
         }
         tol("feasibility_tolerance", self.feasibility_tolerance)?;
         tol("multiplier_tolerance", self.multiplier_tolerance)?;
         tol("dependence_tolerance", self.dependence_tolerance)?;
         if !(self.elastic_penalty.is_finite() && self.elastic_penalty >= 1.0) {
-            return Err(SettingsError { field: "elastic_penalty", expected: "a finite number ≥ 1" });
+            return Err(SettingsError {
+                field: "elastic_penalty",
+                expected: "a finite number ≥ 1",
+            });
         }
         Ok(())
     }
@@ -177,7 +186,9 @@ impl ActiveSetSolver {
             Matrix::from_fn(qp.inequality_rows(), 6, |i, j| qp.hw[(i, j)] + hp[(i, j)])
         };
         let rows = qp.inequality_rows();
-        let norms: Vec<f64> = (0..rows).map(|i| grasp_core::matrix::norm2(hn.row(i))).collect();
+        let norms: Vec<f64> = (0..rows)
+            .map(|i| grasp_core::matrix::norm2(hn.row(i)))
+            .collect();
         // A row no torque affects: its norm in y is at rounding level of H's.
         let hscale = (0..rows)
             .map(|i| grasp_core::matrix::norm2(hd.row(i)))
@@ -268,7 +279,8 @@ impl TorqueSolver for ActiveSetSolver {
         // Rows that no torque affects must hold for the wrench alone.
         for (r, &row) in self.fixed.iter().enumerate() {
             let c = self.fixed_c0[r] - dot(self.fixed_m.row(r), w);
-            let tol = self.settings.feasibility_tolerance * self.qp.c0[row].abs().max(norm_inf(w)).max(1.0);
+            let tol = self.settings.feasibility_tolerance
+                * self.qp.c0[row].abs().max(norm_inf(w)).max(1.0);
             if c > tol {
                 out.status = Status::Infeasible;
                 out.reason = Some(Reason::FixedRowViolated {
@@ -379,7 +391,13 @@ impl<'s> Iter<'s> {
     fn new(s: &'s mut ActiveSetSolver) -> Self {
         let scale = norm_inf(&s.ws.b).max(f64::MIN_POSITIVE);
         let penalty = s.settings.elastic_penalty * scale.max(1e-12);
-        Self { s, iterations: 0, penalty, scale, bland: false }
+        Self {
+            s,
+            iterations: 0,
+            penalty,
+            scale,
+            bland: false,
+        }
     }
 
     fn k(&self) -> usize {
@@ -511,7 +529,12 @@ impl<'s> Iter<'s> {
         // With s fixed at 0 the penalty moves only the multiplier of `s ≥ 0`; leaving it
         // out of z* keeps M's rounding out of y.
         let exact = ws.factor.contains(S_ROW);
-        ws.factor.solve(penalty, exact, |i| if i == S_ROW { 0.0 } else { b[i] }, &mut ws.zstar);
+        ws.factor.solve(
+            penalty,
+            exact,
+            |i| if i == S_ROW { 0.0 } else { b[i] },
+            &mut ws.zstar,
+        );
     }
 
     fn run(&mut self, warm: &WarmStart<'_>) -> End {
@@ -593,7 +616,9 @@ impl<'s> Iter<'s> {
                 self.s.ws.ad[i] = ad;
                 if ad < -dep {
                     let ratio = self.s.ws.resid[i].max(0.0) / -ad;
-                    if ratio < alpha || (self.bland && ratio == alpha && block.is_some_and(|b| i < b)) {
+                    if ratio < alpha
+                        || (self.bland && ratio == alpha && block.is_some_and(|b| i < b))
+                    {
                         alpha = ratio;
                         block = Some(i);
                     }

@@ -7,7 +7,10 @@ use grasp_core::file::MatrixFile;
 use grasp_core::{solve, Equilibrium, ModelOptions, Status, TorqueQp, WarmStart};
 
 fn cases() -> Vec<serde_json::Value> {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/data/reference-cases.json");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../tests/data/reference-cases.json"
+    );
     let text = std::fs::read_to_string(path).expect("reference cases");
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
     v["cases"].as_array().unwrap().clone()
@@ -17,7 +20,14 @@ fn solve_case(problem: &serde_json::Value, sides: usize, eq: Equilibrium) -> gra
     let file: MatrixFile = serde_json::from_value(problem.clone()).unwrap();
     let mut p = file.into_problem().unwrap();
     p.linearization.sides = sides;
-    let qp = TorqueQp::new(&p, &ModelOptions { equilibrium: eq, ..Default::default() }).unwrap();
+    let qp = TorqueQp::new(
+        &p,
+        &ModelOptions {
+            equilibrium: eq,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let mut s = ActiveSetSolver::new(qp, ActiveSetSettings::default()).unwrap();
     solve(&mut s, &p.wrench, &WarmStart::default()).unwrap()
 }
@@ -31,10 +41,19 @@ fn linearised_objectives_match_the_reference() {
             let r = &case["reference"][variant];
             let sol = solve_case(&case["problem"], sides, Equilibrium::Consistent);
             assert_eq!(r["status"], "optimal");
-            assert_eq!(sol.status, Status::Optimal, "{name} {variant}: {:?}", sol.reason);
+            assert_eq!(
+                sol.status,
+                Status::Optimal,
+                "{name} {variant}: {:?}",
+                sol.reason
+            );
             let want = r["objective"].as_f64().unwrap();
             let rel = (sol.objective - want).abs() / want.abs().max(1e-300);
-            assert!(rel < 1e-6, "{name} {variant}: {} vs {want} (rel {rel:.2e})", sol.objective);
+            assert!(
+                rel < 1e-6,
+                "{name} {variant}: {} vs {want} (rel {rel:.2e})",
+                sol.objective
+            );
             checked += 1;
         }
     }
@@ -51,6 +70,9 @@ fn paper_model_reproduces_the_published_optimum() {
         assert!((t - w).abs() < 1e-9, "{:?}", sol.torque);
     }
     assert!((sol.objective - 42.5).abs() < 1e-9);
-    assert!(sol.diagnostics.wrench_residual > 0.1, "the paper's optimum does not hold the disc");
+    assert!(
+        sol.diagnostics.wrench_residual > 0.1,
+        "the paper's optimum does not hold the disc"
+    );
     assert!(!sol.warnings.is_empty());
 }

@@ -282,7 +282,7 @@ mod tests {
                 for m in MODELS.iter().skip(1) {
                     let cone = inscribed_cone(m, &lin(n, k, s));
                     for v in &cone.vertices {
-                        assert!(m.exact_margin(v).abs() < 1e-12, "{m:?} {v:?}");
+                        assert!(m.exact_margin(v, 0.0).abs() < 1e-12, "{m:?} {v:?}");
                         let vals = cone.faces.mul_vec(v);
                         assert!(vals.iter().all(|&x| x > -1e-12), "{m:?} {vals:?}");
                         // A vertex of the polytope touches at least three faces (two for PCwF).
@@ -343,7 +343,9 @@ mod tests {
     #[test]
     fn settings_are_validated() {
         assert!(lin(2, 1, SfceSpacing::Paper).validate().is_err());
-        assert!(lin(MAX_SIDES + 1, 1, SfceSpacing::Paper).validate().is_err());
+        assert!(lin(MAX_SIDES + 1, 1, SfceSpacing::Paper)
+            .validate()
+            .is_err());
         assert!(lin(4, 0, SfceSpacing::Paper).validate().is_err());
         assert!(Linearization::default().validate().is_ok());
     }

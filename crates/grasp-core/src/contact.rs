@@ -102,14 +102,16 @@ impl ContactModel {
 
     /// Scale-free margin to the exact cone: `(fz − g)/max(|fz|, g)`.
     ///
-    /// 1 is a pure normal push, 0 is on the cone surface (or no force at all), and a
-    /// negative value is outside the cone (down to −1). Multiplying the force by a
-    /// positive factor leaves it unchanged.
-    pub fn exact_margin(&self, f: &[f64]) -> f64 {
+    /// 1 is a pure normal push, 0 is on the cone surface, and a negative value is
+    /// outside the cone (down to −1). Multiplying the force by a positive factor leaves
+    /// it unchanged. A force with `max(|fz|, g) ≤ zero` counts as no force at all,
+    /// which sits on the apex: margin 0 (pass `0.0` to disable; the core passes
+    /// `1e-12 × the largest contact force component`, below which components are rounding).
+    pub fn exact_margin(&self, f: &[f64], zero: f64) -> f64 {
         let fz = f[self.normal_index()];
         let g = self.gauge(f);
         let den = fz.abs().max(g);
-        if den == 0.0 {
+        if den <= zero {
             0.0
         } else {
             (fz - g) / den
@@ -124,23 +126,30 @@ mod tests {
     #[test]
     fn margins_are_scale_free_and_signed() {
         let c = ContactModel::Pcwf { mu: 0.5 };
-        assert_eq!(c.exact_margin(&[0.0, 0.0, 2.0]), 1.0);
-        assert!(c.exact_margin(&[0.5, 0.0, 1.0]).abs() < 1e-15);
-        assert!(c.exact_margin(&[1.0, 0.0, 1.0]) < 0.0);
-        let a = c.exact_margin(&[0.1, 0.2, 1.0]);
-        let b = c.exact_margin(&[10.0, 20.0, 100.0]);
+        assert_eq!(c.exact_margin(&[0.0, 0.0, 2.0], 0.0), 1.0);
+        assert!(c.exact_margin(&[0.5, 0.0, 1.0], 0.0).abs() < 1e-15);
+        assert!(c.exact_margin(&[1.0, 0.0, 1.0], 0.0) < 0.0);
+        let a = c.exact_margin(&[0.1, 0.2, 1.0], 0.0);
+        let b = c.exact_margin(&[10.0, 20.0, 100.0], 0.0);
         assert!((a - b).abs() < 1e-15);
-        assert_eq!(ContactModel::Fpc.exact_margin(&[-3.0]), -1.0);
+        assert_eq!(ContactModel::Fpc.exact_margin(&[-3.0], 0.0), -1.0);
+        assert_eq!(c.exact_margin(&[1e-17, 0.0, -1e-18], 1e-12), 0.0);
     }
 
     #[test]
     fn validation_rejects_bad_coefficients() {
         assert!(ContactModel::Pcwf { mu: 0.0 }.validate().is_err());
-        assert!(ContactModel::SfcLinear { mu: 0.5, mu_torsion: f64::NAN }
-            .validate()
-            .is_err());
-        assert!(ContactModel::SfcElliptic { mu: 0.5, mu_torsion: 0.01 }
-            .validate()
-            .is_ok());
+        assert!(ContactModel::SfcLinear {
+            mu: 0.5,
+            mu_torsion: f64::NAN
+        }
+        .validate()
+        .is_err());
+        assert!(ContactModel::SfcElliptic {
+            mu: 0.5,
+            mu_torsion: 0.01
+        }
+        .validate()
+        .is_ok());
     }
 }

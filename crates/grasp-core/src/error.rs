@@ -8,12 +8,12 @@
 #[non_exhaustive]
 pub enum ProblemError {
     /// The file could not be read.
-    #[error("could not read {path}: {source}")]
+    #[error("could not read {path}: {error}")]
     Io {
         /// The path given.
         path: String,
         /// The operating system's error.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// The text is not JSON of the expected shape.
     #[error("{}{message} (line {line}, column {column})", if path.is_empty() || path == "." { String::new() } else { format!("{path}: ") })]

@@ -73,7 +73,9 @@ impl ContactSpec {
             }
             ModelName::Pcwf => {
                 unused(self.mu_torsion, "mu_torsion")?;
-                ContactModel::Pcwf { mu: need(self.mu, "mu")? }
+                ContactModel::Pcwf {
+                    mu: need(self.mu, "mu")?,
+                }
             }
             ModelName::Sfcl => ContactModel::SfcLinear {
                 mu: need(self.mu, "mu")?,
@@ -85,7 +87,11 @@ impl ContactSpec {
             },
         };
         model.validate().map_err(|e| {
-            ProblemError::invalid(format!("{field}.{}", e.field), "a finite number > 0", e.value)
+            ProblemError::invalid(
+                format!("{field}.{}", e.field),
+                "a finite number > 0",
+                e.value,
+            )
         })?;
         Ok(model)
     }
@@ -94,8 +100,16 @@ impl ContactSpec {
 impl From<&ContactModel> for ContactSpec {
     fn from(m: &ContactModel) -> Self {
         match *m {
-            ContactModel::Fpc => Self { model: ModelName::Fpc, mu: None, mu_torsion: None },
-            ContactModel::Pcwf { mu } => Self { model: ModelName::Pcwf, mu: Some(mu), mu_torsion: None },
+            ContactModel::Fpc => Self {
+                model: ModelName::Fpc,
+                mu: None,
+                mu_torsion: None,
+            },
+            ContactModel::Pcwf { mu } => Self {
+                model: ModelName::Pcwf,
+                mu: Some(mu),
+                mu_torsion: None,
+            },
             ContactModel::SfcLinear { mu, mu_torsion } => Self {
                 model: ModelName::Sfcl,
                 mu: Some(mu),
@@ -223,7 +237,11 @@ impl Options {
                     .enumerate()
                     .map(|(i, v)| {
                         v.as_f64().ok_or_else(|| {
-                            ProblemError::invalid(format!("min_normal_force[{i}]"), "a number ≥ 0", v)
+                            ProblemError::invalid(
+                                format!("min_normal_force[{i}]"),
+                                "a number ≥ 0",
+                                v,
+                            )
                         })
                     })
                     .collect::<Result<_, _>>()?,
@@ -275,22 +293,57 @@ pub fn from_json_str<'de, T: Deserialize<'de>>(text: &'de str) -> Result<T, Prob
             Some(i) => message[..i].to_string(),
             None => message,
         };
-        ProblemError::Parse { path, message, line, column }
+        ProblemError::Parse {
+            path,
+            message,
+            line,
+            column,
+        }
     })?;
     Ok(value)
 }
 
-/// Parses a problem file's text (matrix form).
+/// Parses a problem file's text, in matrix form (`grasp_matrix`, `jacobian_transpose`)
+/// or geometry form (`contacts` with positions, and `fingers`).
 pub fn parse_problem(text: &str) -> Result<GraspProblem, ProblemError> {
-    from_json_str::<MatrixFile>(text)?.into_problem()
+    let value: serde_json::Value = from_json_str(text)?;
+    let Some(obj) = value.as_object() else {
+        return Err(ProblemError::invalid(
+            "(top level)",
+            "a JSON object",
+            kind_of(&value),
+        ));
+    };
+    let matrix = obj.contains_key("grasp_matrix") || obj.contains_key("jacobian_transpose");
+    let geometry = obj.contains_key("fingers");
+    match (matrix, geometry) {
+        (true, false) => from_json_str::<MatrixFile>(text)?.into_problem(),
+        (false, true) => from_json_str::<crate::geometry::GeometryFile>(text)?.into_problem(),
+        _ => Err(ProblemError::invalid(
+            "(top level)",
+            "one of the two forms: matrix form with grasp_matrix and jacobian_transpose, or geometry form with fingers (and contacts with position and normal)",
+            if matrix { "fields of both forms" } else { "neither grasp_matrix nor fingers" },
+        )),
+    }
+}
+
+fn kind_of(v: &serde_json::Value) -> &'static str {
+    match v {
+        serde_json::Value::Null => "null",
+        serde_json::Value::Bool(_) => "a boolean",
+        serde_json::Value::Number(_) => "a number",
+        serde_json::Value::String(_) => "a string",
+        serde_json::Value::Array(_) => "an array",
+        serde_json::Value::Object(_) => "an object",
+    }
 }
 
 /// Reads and parses a problem file.
 pub fn load_problem(path: impl AsRef<Path>) -> Result<GraspProblem, ProblemError> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|source| ProblemError::Io {
+    let text = std::fs::read_to_string(path).map_err(|error| ProblemError::Io {
         path: path.display().to_string(),
-        source,
+        error,
     })?;
     parse_problem(&text)
 }

@@ -11,11 +11,13 @@ pub mod cone;
 pub mod contact;
 pub mod error;
 pub mod file;
+pub mod geometry;
 pub mod linalg;
 pub mod matrix;
 pub mod problem;
 pub mod qp;
 pub mod solver;
+pub mod synth;
 
 pub use cone::{inscribed_cone, InscribedCone, Linearization, SfceSpacing};
 pub use contact::ContactModel;

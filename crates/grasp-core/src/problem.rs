@@ -75,11 +75,19 @@ impl GraspProblem {
         }
         let n = g.ncols();
         if n == 0 {
-            return Err(ProblemError::invalid("grasp_matrix", "at least one column", "none"));
+            return Err(ProblemError::invalid(
+                "grasp_matrix",
+                "at least one column",
+                "none",
+            ));
         }
         finite_matrix("grasp_matrix", g)?;
         if self.contacts.is_empty() {
-            return Err(ProblemError::invalid("contacts", "at least one contact", "an empty list"));
+            return Err(ProblemError::invalid(
+                "contacts",
+                "at least one contact",
+                "an empty list",
+            ));
         }
         for (i, c) in self.contacts.iter().enumerate() {
             c.validate().map_err(|e| {
@@ -100,7 +108,11 @@ impl GraspProblem {
         }
         let jt = &self.jacobian_transpose;
         if jt.nrows() == 0 {
-            return Err(ProblemError::invalid("jacobian_transpose", "at least one joint row", "none"));
+            return Err(ProblemError::invalid(
+                "jacobian_transpose",
+                "at least one joint row",
+                "none",
+            ));
         }
         if jt.ncols() != n {
             return Err(ProblemError::invalid(
@@ -112,7 +124,11 @@ impl GraspProblem {
         finite_matrix("jacobian_transpose", jt)?;
         for (j, v) in self.wrench.iter().enumerate() {
             if !v.is_finite() {
-                return Err(ProblemError::invalid(format!("wrench[{j}]"), "a finite number", v));
+                return Err(ProblemError::invalid(
+                    format!("wrench[{j}]"),
+                    "a finite number",
+                    v,
+                ));
             }
         }
         self.linearization
@@ -167,7 +183,11 @@ impl GraspProblem {
             per_joint("initial_torque", t.len(), m)?;
             for (j, v) in t.iter().enumerate() {
                 if !v.is_finite() {
-                    return Err(ProblemError::invalid(format!("initial_torque[{j}]"), "a finite number", v));
+                    return Err(ProblemError::invalid(
+                        format!("initial_torque[{j}]"),
+                        "a finite number",
+                        v,
+                    ));
                 }
             }
         }
@@ -179,7 +199,11 @@ fn finite_matrix(name: &str, a: &Matrix) -> Result<(), ProblemError> {
     for i in 0..a.nrows() {
         for (j, v) in a.row(i).iter().enumerate() {
             if !v.is_finite() {
-                return Err(ProblemError::invalid(format!("{name}[{i}][{j}]"), "a finite number", v));
+                return Err(ProblemError::invalid(
+                    format!("{name}[{i}][{j}]"),
+                    "a finite number",
+                    v,
+                ));
             }
         }
     }

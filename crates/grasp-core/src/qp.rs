@@ -163,13 +163,21 @@ impl TorqueQp {
                 row_kinds.push(if k + 1 == r {
                     RowKind::NormalForce { contact: ci }
                 } else {
-                    RowKind::Face { contact: ci, face: k }
+                    RowKind::Face {
+                        contact: ci,
+                        face: k,
+                    }
                 });
             }
             if let Some(fmin) = &p.min_normal_force {
                 s0[row + r - 1] = fmin[ci];
             }
-            contacts.push(ContactBlock { model: *model, offset, first_row: row, rows: r });
+            contacts.push(ContactBlock {
+                model: *model,
+                offset,
+                first_row: row,
+                rows: r,
+            });
             offset += model.dim();
             row += r;
         }
@@ -195,7 +203,11 @@ impl TorqueQp {
 
         // Consistency: U⊥ = columns of U beyond the rank.
         let (eq, eq_w, unreachable) = match opts.equilibrium {
-            Equilibrium::PaperModel => (Matrix::zeros(0, m), Matrix::zeros(0, 6), Matrix::zeros(0, 6)),
+            Equilibrium::PaperModel => (
+                Matrix::zeros(0, m),
+                Matrix::zeros(0, 6),
+                Matrix::zeros(0, 6),
+            ),
             Equilibrium::Consistent => {
                 let p_rows = 6 + m - rank;
                 let u_perp_t = Matrix::from_fn(p_rows, 6 + m, |i, j| dec.u[(j, rank + i)]);
@@ -295,7 +307,10 @@ impl TorqueQp {
             RowKind::Face { contact, face } => format!("contact {contact} face {face}"),
             RowKind::NormalForce { contact } => format!("contact {contact} normal force"),
             RowKind::TorqueLimit { joint, upper } => {
-                format!("joint {joint} {} torque limit", if upper { "upper" } else { "lower" })
+                format!(
+                    "joint {joint} {} torque limit",
+                    if upper { "upper" } else { "lower" }
+                )
             }
         }
     }

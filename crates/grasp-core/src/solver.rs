@@ -255,7 +255,10 @@ fn check_inputs(qp: &TorqueQp, w: &[f64; 6], warm: &WarmStart<'_>) -> Result<(),
     }
     if let Some(t) = warm.torque {
         if t.len() != qp.joints() {
-            return Err(WarmStartError::TorqueLength { expected: qp.joints(), found: t.len() });
+            return Err(WarmStartError::TorqueLength {
+                expected: qp.joints(),
+                found: t.len(),
+            });
         }
         if let Some(index) = t.iter().position(|v| !v.is_finite()) {
             return Err(WarmStartError::TorqueNotFinite { index });
@@ -289,7 +292,11 @@ impl TorqueQp {
         out.contact_forces.resize(n, 0.0);
         self.forces_into(w, tau, &mut out.contact_forces);
         let f = &out.contact_forces;
-        out.objective = tau.iter().zip(&self.weights).map(|(t, wj)| wj * t * t).sum();
+        out.objective = tau
+            .iter()
+            .zip(&self.weights)
+            .map(|(t, wj)| wj * t * t)
+            .sum();
         d.wrench_residual = (0..6)
             .map(|i| (dot(self.grasp_matrix.row(i), f) - w[i]).abs())
             .fold(0.0, f64::max);
@@ -302,8 +309,12 @@ impl TorqueQp {
         d.max_violation = (0..self.inequality_rows())
             .map(|i| (self.c0[i] - dot(self.hw.row(i), w) - dot(self.h.row(i), tau)).max(0.0))
             .fold(0.0, f64::max);
+        let zero = 1e-12 * norm_inf(f);
         for c in &self.contacts {
-            d.friction_margins.push(c.model.exact_margin(&f[c.offset..c.offset + c.model.dim()]));
+            d.friction_margins.push(
+                c.model
+                    .exact_margin(&f[c.offset..c.offset + c.model.dim()], zero),
+            );
         }
         if self.equilibrium == Equilibrium::PaperModel {
             let scale = norm_inf(w).max(norm_inf(f)).max(1.0);

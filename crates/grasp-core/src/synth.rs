@@ -1,0 +1,169 @@
+//! Synthetic but physically sensible grasps, for property tests and benchmarks.
+//!
+//! A sphere of radius 3–6 cm at the origin is held by 2–5 fingers, one fingertip
+//! contact each, spread around it; each finger is a chain of 2–4 joints whose axes are
+//! roughly perpendicular to the approach direction (flexion) with one abduction joint
+//! at the base. The wrench holds 50–500 g against gravity, plus a small disturbance.
+//! Everything follows from a seed through a small fixed PRNG, so a failing case is
+//! reproducible from its seed alone.
+
+use crate::cone::Linearization;
+use crate::file::ModelName;
+use crate::geometry::{FingerSpec, GeometricContact, GeometryFile, JointSpec, JointType};
+
+/// Which contact models the generator may use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelMix {
+    /// All four models, chosen per contact.
+    Mixed,
+    /// One model for every contact.
+    Only(ModelName),
+}
+
+/// What to generate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SynthSpec {
+    /// Fingers (= contacts), 2–5 when random.
+    pub fingers: Option<usize>,
+    /// Joints per finger, 2–4 when random.
+    pub joints_per_finger: Option<usize>,
+    /// Contact models.
+    pub models: ModelMix,
+    /// Linearisation written into the problem.
+    pub linearization: Linearization,
+}
+
+impl Default for SynthSpec {
+    fn default() -> Self {
+        Self {
+            fingers: None,
+            joints_per_finger: None,
+            models: ModelMix::Mixed,
+            linearization: Linearization::default(),
+        }
+    }
+}
+
+/// splitmix64: tiny, fixed, good enough for test data.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn int(&mut self, lo: usize, hi: usize) -> usize {
+        lo + (self.next() % (hi - lo + 1) as u64) as usize
+    }
+}
+
+fn normalize(v: [f64; 3]) -> [f64; 3] {
+    let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    [v[0] / l, v[1] / l, v[2] / l]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// A grasp in geometry form from `seed`.
+pub fn synthetic_grasp(seed: u64, spec: &SynthSpec) -> GeometryFile {
+    let mut rng = Rng(seed ^ 0x6a09_e667_f3bc_c908);
+    let nf = spec.fingers.unwrap_or_else(|| rng.int(2, 5));
+    let radius = rng.uniform(0.03, 0.06);
+    let mass = rng.uniform(0.05, 0.5);
+    let phase = rng.uniform(0.0, std::f64::consts::TAU);
+    let mut contacts = Vec::with_capacity(nf);
+    let mut fingers = Vec::with_capacity(nf);
+    for k in 0..nf {
+        let nj = spec.joints_per_finger.unwrap_or_else(|| rng.int(2, 4));
+        // Spread around the equator, tilted up or down a little.
+        let az = phase + std::f64::consts::TAU * k as f64 / nf as f64 + rng.uniform(-0.3, 0.3);
+        let el = rng.uniform(-0.5, 0.5);
+        let u = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
+        let p = [radius * u[0], radius * u[1], radius * u[2]];
+        let model = match spec.models {
+            ModelMix::Only(m) => m,
+            ModelMix::Mixed => [
+                ModelName::Fpc,
+                ModelName::Pcwf,
+                ModelName::Sfcl,
+                ModelName::Sfce,
+            ][rng.int(0, 3)],
+        };
+        let mu = rng.uniform(0.3, 1.0);
+        let mu_t = rng.uniform(0.005, 0.03);
+        contacts.push(GeometricContact {
+            name: None,
+            position: p,
+            normal: [-u[0], -u[1], -u[2]],
+            model,
+            mu: (model != ModelName::Fpc).then_some(mu),
+            mu_torsion: matches!(model, ModelName::Sfcl | ModelName::Sfce).then_some(mu_t),
+            finger: Some(k),
+            link: None,
+        });
+        // Joints from the palm side toward the fingertip, 2–5 cm apart.
+        let side = normalize(cross(u, [0.0, 0.0, 1.0]));
+        let mut joints = Vec::with_capacity(nj);
+        for j in 0..nj {
+            let back = rng.uniform(0.02, 0.05) * (nj - j) as f64;
+            let o = [
+                p[0] + u[0] * back + rng.uniform(-0.01, 0.01),
+                p[1] + u[1] * back + rng.uniform(-0.01, 0.01),
+                p[2] + u[2] * back + rng.uniform(-0.01, 0.01) + 0.02,
+            ];
+            let axis = if j == 0 {
+                normalize([
+                    u[0] * 0.1 + rng.uniform(-0.2, 0.2),
+                    u[1] * 0.1 + rng.uniform(-0.2, 0.2),
+                    1.0,
+                ])
+            } else {
+                normalize([
+                    side[0] + rng.uniform(-0.2, 0.2),
+                    side[1] + rng.uniform(-0.2, 0.2),
+                    side[2] + rng.uniform(-0.2, 0.2),
+                ])
+            };
+            joints.push(JointSpec {
+                name: None,
+                origin: o,
+                axis,
+                kind: JointType::Revolute,
+            });
+        }
+        fingers.push(FingerSpec { name: None, joints });
+    }
+    let g = 9.81;
+    let wrench = vec![
+        rng.uniform(-0.1, 0.1) * mass * g,
+        rng.uniform(-0.1, 0.1) * mass * g,
+        mass * g,
+        rng.uniform(-0.01, 0.01) * mass * g * radius * 10.0,
+        rng.uniform(-0.01, 0.01) * mass * g * radius * 10.0,
+        rng.uniform(-0.01, 0.01) * mass * g * radius * 10.0,
+    ];
+    GeometryFile {
+        name: Some(format!("synthetic-{seed}")),
+        description: Some("grasp_core::synth::synthetic_grasp".into()),
+        contacts,
+        fingers,
+        wrench,
+        linearization: Some(spec.linearization),
+        torque_weights: None,
+        torque_limits: None,
+        min_normal_force: None,
+        initial_torque: None,
+    }
+}

@@ -1,0 +1,136 @@
+//! Command-line parsing and the subcommands.
+
+mod format;
+mod solve;
+
+use anyhow::{bail, Context, Result};
+use clap::{Parser, Subcommand, ValueEnum};
+use grasp_torque::{Backend, Cones, Equilibrium, GraspProblem, SfceSpacing, SolverConfig};
+use std::path::PathBuf;
+
+/// Minimum-torque grasp forces for dexterous hands (Jia et al.'s key-constraint-set
+/// method, with the consistency constraints that make the torques hold the object).
+#[derive(Parser, Debug)]
+#[command(name = "grasp-torque", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Solve one problem file and report torques, contact forces and checks.
+    Solve(solve::SolveArgs),
+}
+
+/// Output format of a report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum Format {
+    /// A readable report.
+    Text,
+    /// One JSON object on stdout.
+    Json,
+}
+
+/// Options shared by the commands that build a model.
+#[derive(clap::Args, Debug, Clone)]
+pub(crate) struct ModelArgs {
+    /// Backend: active-set or clarabel (those compiled in).
+    #[arg(long, default_value = "active-set")]
+    backend: String,
+    /// Cones: linear (inscribed polyhedra) or exact (clarabel only).
+    #[arg(long, default_value = "linear")]
+    cones: String,
+    /// N, sides of the inscribed polygons (overrides the file).
+    #[arg(long)]
+    sides: Option<usize>,
+    /// K, latitudes per hemisphere of SFCe polyhedra (overrides the file).
+    #[arg(long)]
+    latitudes: Option<usize>,
+    /// Placement of SFCe latitudes: paper (eq. 13) or uniform (ellipse angle).
+    #[arg(long, value_enum)]
+    sfce_spacing: Option<Spacing>,
+    /// The paper's model without the consistency constraints: reproduces its numbers,
+    /// but the torques generally do not hold the object (a warning says by how much).
+    #[arg(long)]
+    paper_model: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum Spacing {
+    Paper,
+    Uniform,
+}
+
+impl ModelArgs {
+    /// Applies the overrides to `p` and returns the solver configuration.
+    pub(crate) fn configure(&self, p: &mut GraspProblem) -> Result<SolverConfig> {
+        if let Some(n) = self.sides {
+            p.linearization.sides = n;
+        }
+        if let Some(k) = self.latitudes {
+            p.linearization.latitudes = k;
+        }
+        if let Some(s) = self.sfce_spacing {
+            p.linearization.sfce_spacing = match s {
+                Spacing::Paper => SfceSpacing::Paper,
+                Spacing::Uniform => SfceSpacing::Uniform,
+            };
+        }
+        p.linearization
+            .validate()
+            .map_err(|e| anyhow::anyhow!("{}", e.to_string().replace("linearization.", "--")))?;
+        let backend: Backend = self
+            .backend
+            .parse()
+            .map_err(|e: String| anyhow::anyhow!("--backend: {e}"))?;
+        let cones: Cones = self
+            .cones
+            .parse()
+            .map_err(|e: String| anyhow::anyhow!("--cones: {e}"))?;
+        if !backend.supports(cones) {
+            bail!(
+                "--backend {backend} does not support --cones {cones}; supported pairs: {}",
+                Backend::supported_pairs()
+            );
+        }
+        let mut config = SolverConfig {
+            backend: Some(backend),
+            cones,
+            ..Default::default()
+        };
+        if self.paper_model {
+            config.model.equilibrium = Equilibrium::PaperModel;
+        }
+        Ok(config)
+    }
+}
+
+/// Parses `a,b,c` into numbers, naming the flag in errors.
+pub(crate) fn parse_list(flag: &str, text: &str) -> Result<Vec<f64>> {
+    text.split(',')
+        .enumerate()
+        .map(|(i, s)| {
+            let v: f64 = s
+                .trim()
+                .parse()
+                .with_context(|| format!("{flag}: value {i} (`{}`) is not a number", s.trim()))?;
+            if !v.is_finite() {
+                bail!("{flag}: value {i} must be finite");
+            }
+            Ok(v)
+        })
+        .collect()
+}
+
+/// Reads a problem file, attributing errors to its path.
+pub(crate) fn load(path: &PathBuf) -> Result<GraspProblem> {
+    grasp_torque::load_problem(path).with_context(|| format!("{}", path.display()))
+}
+
+pub(crate) fn run() -> Result<u8> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Solve(args) => solve::run(&args),
+    }
+}
