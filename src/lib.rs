@@ -3,7 +3,7 @@
 pub use grasp_core::*;
 
 #[cfg(feature = "active-set")]
-pub use grasp_active_set::{ActiveSetSettings, ActiveSetSolver};
+pub use grasp_active_set::{ActiveSetSettings, ActiveSetSolver, Phase1};
 #[cfg(feature = "clarabel")]
 pub use grasp_clarabel::{ClarabelSettings, ClarabelSolver};
 

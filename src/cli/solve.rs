@@ -35,7 +35,15 @@ pub(crate) fn run(args: &SolveArgs) -> Result<u8> {
     let mut problem = load(&args.problem)?;
     let config = args.model.configure(&mut problem)?;
     if let Some(t) = &args.initial_torque {
-        problem.initial_torque = Some(parse_list("--initial-torque", t)?);
+        let t = parse_list("--initial-torque", t)?;
+        if t.len() != problem.joints() {
+            anyhow::bail!(
+                "--initial-torque: expected {} values (one per joint), got {}",
+                problem.joints(),
+                t.len()
+            );
+        }
+        problem.initial_torque = Some(t);
     }
     let mut solver = GraspSolver::new(&problem, &config)?;
     let warm = WarmStart {

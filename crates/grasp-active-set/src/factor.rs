@@ -113,6 +113,33 @@ impl Factor {
         true
     }
 
+    /// For the dual phase: the primal direction `Q2 Q2ᵀ a` into `z` and the dual
+    /// direction `R⁻¹ Q1ᵀ a` into [`Self::lambda`].
+    pub(crate) fn directions(&mut self, a: &[f64], z: &mut [f64]) {
+        let (n, t) = (self.n, self.rows.len());
+        for j in 0..n {
+            self.v[j] = self.q[j * n..(j + 1) * n]
+                .iter()
+                .zip(a)
+                .map(|(x, y)| x * y)
+                .sum();
+        }
+        z[..n].iter_mut().for_each(|x| *x = 0.0);
+        for j in t..n {
+            let c = self.v[j];
+            for (zi, qv) in z.iter_mut().zip(&self.q[j * n..(j + 1) * n]) {
+                *zi += c * qv;
+            }
+        }
+        for i in (0..t).rev() {
+            let mut s = self.v[i];
+            for j in i + 1..t {
+                s -= self.r[j * n + i] * self.lambda[j];
+            }
+            self.lambda[i] = s / self.r[i * n + i];
+        }
+    }
+
     /// Removes the key-set row at `pos`.
     pub(crate) fn remove(&mut self, pos: usize) {
         let (n, t) = (self.n, self.rows.len());

@@ -30,11 +30,29 @@ use grasp_core::{Matrix, Reason, Solution, Status, TorqueQp, TorqueSolver, WarmS
 mod factor;
 use factor::Factor;
 
+/// How a cold solve finds its first feasible point (Step 1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Phase1 {
+    /// The dual active-set method of Goldfarb and Idnani on the same factorisation: on
+    /// this identity-Hessian problem its first feasible point is already optimal, so the
+    /// paper's Steps 2–4 confirm it in one iteration. Fastest; the default.
+    #[default]
+    Dual,
+    /// The paper's primal iteration from τ = the minimum-norm consistent torque, made
+    /// feasible by one elastic variable with an exact penalty: the paper's algorithm
+    /// from scratch, for studying it. Typically several times more iterations.
+    Elastic,
+}
+
 /// Settings of the active-set method. Tolerances are relative to the problem's scale
 /// (`max(‖ĉ‖∞, ‖y‖∞)`, in units of the weighted torque).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ActiveSetSettings {
-    /// Iteration cap (each iteration is one subproblem solve). Default 10 000.
+    /// Cold-start phase 1. Default [`Phase1::Dual`]. Warm starts always use the primal
+    /// iteration from the given torque or key set.
+    pub phase1: Phase1,
+    /// Iteration cap (each iteration is one subproblem solve or one phase-1 step).
+    /// Default 10 000.
     pub max_iterations: usize,
     /// A row holds when `Ĥ_i y − ĉ_i ≥ −feasibility_tolerance · scale`. Default 1e-9.
     pub feasibility_tolerance: f64,
@@ -46,18 +64,22 @@ pub struct ActiveSetSettings {
     pub dependence_tolerance: f64,
     /// First elastic penalty M, relative to the scale. Default 1e3.
     pub elastic_penalty: f64,
-    /// Times M may grow ×1000 before the grasp is declared infeasible. Default 4.
+    /// Factor by which M grows while the elastic variable stays positive. Default 1000.
+    pub penalty_growth: f64,
+    /// Times M may grow before the grasp is declared infeasible. Default 4.
     pub penalty_increases: u32,
 }
 
 impl Default for ActiveSetSettings {
     fn default() -> Self {
         Self {
+            phase1: Phase1::Dual,
             max_iterations: 10_000,
             feasibility_tolerance: 1e-9,
             multiplier_tolerance: 1e-10,
             dependence_tolerance: 1e-10,
             elastic_penalty: 1e3,
+            penalty_growth: 1e3,
             penalty_increases: 4,
         }
     }
@@ -95,10 +117,16 @@ impl ActiveSetSettings {
         tol("feasibility_tolerance", self.feasibility_tolerance)?;
         tol("multiplier_tolerance", self.multiplier_tolerance)?;
         tol("dependence_tolerance", self.dependence_tolerance)?;
-        if !(self.elastic_penalty.is_finite() && self.elastic_penalty >= 1.0) {
+        if !(self.elastic_penalty.is_finite() && self.elastic_penalty > 0.0) {
             return Err(SettingsError {
                 field: "elastic_penalty",
-                expected: "a finite number ≥ 1",
+                expected: "a finite number > 0",
+            });
+        }
+        if !(self.penalty_growth.is_finite() && self.penalty_growth > 1.0) {
+            return Err(SettingsError {
+                field: "penalty_growth",
+                expected: "a finite number > 1",
             });
         }
         Ok(())
@@ -160,6 +188,8 @@ struct Workspace {
     zstar: Vec<f64>,
     d: Vec<f64>,
     u: Vec<f64>,
+    /// Multipliers of the key set during the dual phase, in factor order.
+    mult: Vec<f64>,
     factor: Factor,
 }
 
@@ -222,6 +252,7 @@ impl ActiveSetSolver {
             zstar: vec![0.0; kp],
             d: vec![0.0; kp],
             u: vec![0.0; m],
+            mult: Vec::with_capacity(kp),
             factor: Factor::new(kp),
         };
         Ok(Self {
@@ -382,6 +413,8 @@ impl ActiveSetSolver {
 struct Iter<'s> {
     s: &'s mut ActiveSetSolver,
     iterations: usize,
+    /// Set by a phase 1 that proved no torque exists.
+    infeasible: bool,
     penalty: f64,
     scale: f64,
     bland: bool,
@@ -394,6 +427,7 @@ impl<'s> Iter<'s> {
         Self {
             s,
             iterations: 0,
+            infeasible: false,
             penalty,
             scale,
             bland: false,
@@ -482,6 +516,9 @@ impl<'s> Iter<'s> {
                     .map(|i| s.null_basis[(i, j)] * (t[i] / s.dinv[i] - s.ws.u[i]))
                     .sum();
             }
+        } else if self.s.settings.phase1 == Phase1::Dual && !self.dual_phase() {
+            self.infeasible = true;
+            return;
         }
         // Elastic variable for the rows y0 violates.
         self.refresh_residuals();
@@ -521,6 +558,96 @@ impl<'s> Iter<'s> {
         }
     }
 
+    /// Cold-start phase 1 (with [`Phase1::Dual`]): the dual active-set method of
+    /// Goldfarb and Idnani on the same QR factorisation. From the unconstrained minimum
+    /// (y = 0, s pinned at 0) it adds the most violated row, stepping along the primal
+    /// direction `Q2 Q2ᵀ a` and the dual direction `R⁻¹ Q1ᵀ a`, and drops a key-set row
+    /// whose multiplier would turn negative. Every iterate is optimal for the rows in
+    /// its key set, so the first primal-feasible one is optimal overall; Steps 2–4 then
+    /// confirm it. Returns false when a violated row is a non-negative combination of
+    /// the key set's (no torque exists); each add or drop counts as an iteration.
+    fn dual_phase(&mut self) -> bool {
+        let k = self.k();
+        let n = k + 1;
+        self.add(S_ROW);
+        self.s.ws.mult.clear();
+        self.s.ws.mult.push(0.0);
+        let max_it = self.s.settings.max_iterations;
+        loop {
+            self.refresh_residuals();
+            let tol = self.feas_tol();
+            let mut worst = (tol, usize::MAX);
+            for (i, &r) in self.s.ws.resid.iter().enumerate() {
+                if -r > worst.0 && !self.s.ws.in_set[i] {
+                    worst = (-r, i);
+                }
+            }
+            let p = worst.1;
+            if p == usize::MAX {
+                return true;
+            }
+            let mut lam_p = 0.0;
+            loop {
+                if self.iterations >= max_it {
+                    return true;
+                }
+                self.iterations += 1;
+                let ws = &mut self.s.ws;
+                ws.d.iter_mut().for_each(|v| *v = 0.0);
+                ws.d[..k].copy_from_slice(self.s.a.row(p));
+                ws.d[k] = ws.e[p];
+                let t = ws.factor.rows().len();
+                // Primal direction into `ad` (length ≥ n is not guaranteed; use zstar),
+                // dual direction into the factor's λ buffer.
+                ws.factor.directions(&ws.d, &mut ws.zstar);
+                let anorm = grasp_core::matrix::norm2(&ws.d);
+                let zn = grasp_core::matrix::norm2(&ws.zstar[..n]);
+                let slack = dot(&ws.d, &ws.z) - ws.b[p];
+                // Dual step limit: a key-set row's multiplier reaching zero (never s ≥ 0,
+                // which pins s and may take either sign).
+                let mut t1 = (f64::INFINITY, usize::MAX);
+                for pos in 0..t {
+                    let r = ws.factor.lambda(pos);
+                    if ws.factor.rows()[pos] != S_ROW && r > 0.0 {
+                        let ratio = ws.mult[pos] / r;
+                        if ratio < t1.0 {
+                            t1 = (ratio, pos);
+                        }
+                    }
+                }
+                let az = dot(&ws.d, &ws.zstar[..n]);
+                let t2 = if zn > self.s.settings.dependence_tolerance * anorm && az > 0.0 {
+                    -slack / az
+                } else {
+                    f64::INFINITY
+                };
+                let step = t1.0.min(t2);
+                if step.is_infinite() {
+                    return false;
+                }
+                for pos in 0..t {
+                    let r = ws.factor.lambda(pos);
+                    ws.mult[pos] -= step * r;
+                }
+                lam_p += step;
+                if t2.is_finite() {
+                    for j in 0..n {
+                        ws.z[j] += step * ws.zstar[j];
+                    }
+                }
+                if step == t2 {
+                    if self.add(p) {
+                        self.s.ws.mult.push(lam_p);
+                    }
+                    break;
+                }
+                let pos = t1.1;
+                self.s.ws.mult.remove(pos);
+                self.remove(pos);
+            }
+        }
+    }
+
     /// The minimiser of `½‖z‖² + penalty·s` over the key set into `zstar`, and the
     /// multipliers into the factor.
     fn subproblem(&mut self, penalty: f64) {
@@ -539,6 +666,9 @@ impl<'s> Iter<'s> {
 
     fn run(&mut self, warm: &WarmStart<'_>) -> End {
         self.start(warm);
+        if self.infeasible {
+            return End::Infeasible;
+        }
         let k = self.k();
         let kp = k + 1;
         let max_it = self.s.settings.max_iterations;
@@ -599,7 +729,7 @@ impl<'s> Iter<'s> {
                     };
                 }
                 increases += 1;
-                self.penalty *= 1e3;
+                self.penalty *= self.s.settings.penalty_growth;
                 continue;
             }
             // Step 2, ratio test (eqs. 45–47).

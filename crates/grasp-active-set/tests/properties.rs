@@ -2,7 +2,7 @@
 //! the original (unreduced) problem, warm and cold solves agree, and every optimal
 //! answer holds the object.
 
-use grasp_active_set::{ActiveSetSettings, ActiveSetSolver};
+use grasp_active_set::{ActiveSetSettings, ActiveSetSolver, Phase1};
 use grasp_core::linalg::svd;
 use grasp_core::matrix::{dot, norm_inf};
 use grasp_core::synth::{synthetic_grasp, SynthSpec};
@@ -111,6 +111,28 @@ proptest! {
                 let dt = s.torque.iter().zip(&cold.torque).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
                 prop_assert!(dt <= 1e-6 * norm_inf(&cold.torque).max(1e-12), "torque differs by {}", dt);
             }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+    /// The two cold starts (dual phase 1, and the paper's primal iteration with an
+    /// elastic start) reach the same answer.
+    #[test]
+    fn both_phase1_methods_agree(seed in any::<u64>()) {
+        let p = problem(seed, 8);
+        let qp = TorqueQp::new(&p, &ModelOptions::default()).unwrap();
+        let mut dual = ActiveSetSolver::new(qp.clone(), ActiveSetSettings::default()).unwrap();
+        let settings = ActiveSetSettings { phase1: Phase1::Elastic, ..Default::default() };
+        let mut elastic = ActiveSetSolver::new(qp, settings).unwrap();
+        let a = solve(&mut dual, &p.wrench, &WarmStart::default()).unwrap();
+        let b = solve(&mut elastic, &p.wrench, &WarmStart::default()).unwrap();
+        prop_assert_eq!(a.status, b.status, "{:?} / {:?}", a.reason, b.reason);
+        if a.status == Status::Optimal {
+            let rel = (a.objective - b.objective).abs() / a.objective.max(f64::MIN_POSITIVE);
+            prop_assert!(rel <= 1e-9, "{} vs {}", a.objective, b.objective);
         }
     }
 }
