@@ -92,10 +92,13 @@ impl ContactModel {
     pub fn gauge(&self, f: &[f64]) -> f64 {
         match *self {
             Self::Fpc => 0.0,
-            Self::Pcwf { mu } => f[0].hypot(f[1]) / mu,
-            Self::SfcLinear { mu, mu_torsion } => f[0].hypot(f[1]) / mu + f[3].abs() / mu_torsion,
+            Self::Pcwf { mu } => (f[0] * f[0] + f[1] * f[1]).sqrt() / mu,
+            Self::SfcLinear { mu, mu_torsion } => {
+                (f[0] * f[0] + f[1] * f[1]).sqrt() / mu + f[3].abs() / mu_torsion
+            }
             Self::SfcElliptic { mu, mu_torsion } => {
-                (f[0].hypot(f[1]) / mu).hypot(f[3] / mu_torsion)
+                let (r, t) = ((f[0] * f[0] + f[1] * f[1]) / (mu * mu), f[3] / mu_torsion);
+                (r + t * t).sqrt()
             }
         }
     }

@@ -306,9 +306,22 @@ impl TorqueQp {
         d.consistency_residual = (0..self.equality_rows())
             .map(|i| (dot(self.eq.row(i), tau) + dot(self.eq_w.row(i), w)).abs())
             .fold(0.0, f64::max);
-        d.max_violation = (0..self.inequality_rows())
-            .map(|i| (self.c0[i] - dot(self.hw.row(i), w) - dot(self.h.row(i), tau)).max(0.0))
-            .fold(0.0, f64::max);
+        // c − H τ = s0 − S f on cone rows (S is block-diagonal: a few flops per row),
+        // and the limit rows read τ directly.
+        d.max_violation = 0.0;
+        for c in &self.contacts {
+            let fc = &f[c.offset..c.offset + c.model.dim()];
+            for i in c.first_row..c.first_row + c.rows {
+                let v = self.c0[i] - dot(&self.s.row(i)[c.offset..c.offset + c.model.dim()], fc);
+                d.max_violation = d.max_violation.max(v);
+            }
+        }
+        for (i, kind) in self.row_kinds.iter().enumerate() {
+            if let crate::qp::RowKind::TorqueLimit { joint, .. } = *kind {
+                let v = self.c0[i] - self.h[(i, joint)] * tau[joint];
+                d.max_violation = d.max_violation.max(v);
+            }
+        }
         let zero = 1e-12 * norm_inf(f);
         for c in &self.contacts {
             d.friction_margins.push(
