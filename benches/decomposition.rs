@@ -36,7 +36,8 @@ fn pinv(c: &mut Criterion) {
         // Agreement check, so the comparison is of equal answers.
         let ours = svd(&a).unwrap().pseudo_inverse(1e-9);
         let d = na.clone().svd(true, true);
-        let theirs = d.pseudo_inverse(1e-9 * d.singular_values.max()).unwrap();
+        let tol = 1e-9 * d.singular_values.max();
+        let theirs = d.pseudo_inverse(tol).unwrap();
         let diff = (0..k)
             .flat_map(|i| (0..r).map(move |j| (i, j)))
             .map(|(i, j)| (ours[(i, j)] - theirs[(i, j)]).abs())

@@ -6,7 +6,7 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use grasp_torque::{
     load_problem, solve_into, GraspProblem, GraspSolver, ModelOptions, Solution, SolverConfig,
-    TorqueQp, TorqueSolver, WarmStart,
+    TorqueQp, WarmStart,
 };
 use std::hint::black_box;
 

@@ -4,6 +4,9 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+/// An edit that spoils a problem file.
+type Edit = Box<dyn Fn(&mut serde_json::Value)>;
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
 }
@@ -126,7 +129,7 @@ fn infeasible_exits_3_with_a_reason() {
 
 #[test]
 fn malformed_files_name_the_field() {
-    let cases: Vec<(&str, Box<dyn Fn(&mut serde_json::Value)>, &str)> = vec![
+    let cases: Vec<(&str, Edit, &str)> = vec![
         (
             "unknown field",
             Box::new(|p| p["gripper"] = 1.into()),
@@ -317,7 +320,7 @@ fn malformed_geometry_names_the_contact_or_joint() {
         ],
         "wrench": [0, 0, 1, 0, 0, 0]
     });
-    let cases: Vec<(Box<dyn Fn(&mut serde_json::Value)>, &str)> = vec![
+    let cases: Vec<(Edit, &str)> = vec![
         (
             Box::new(|g| g["contacts"][0]["normal"] = serde_json::json!([2, 0, 0])),
             "contacts[0] (thumb_tip).normal",

@@ -1,7 +1,9 @@
 //! Command-line parsing and the subcommands.
 
+mod build;
 mod format;
 mod solve;
+mod table;
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
@@ -21,6 +23,11 @@ struct Cli {
 enum Command {
     /// Solve one problem file and report torques, contact forces and checks.
     Solve(solve::SolveArgs),
+    /// Print a problem file (either form) in matrix form, ready for `solve`.
+    Build(build::BuildArgs),
+    /// The paper's Table 1: torques before (contact-force optimum mapped through Jᵀ)
+    /// and after (torque-space optimum), per object.
+    Table(table::TableArgs),
 }
 
 /// Output format of a report.
@@ -132,5 +139,7 @@ pub(crate) fn run() -> Result<u8> {
     let cli = Cli::parse();
     match cli.command {
         Command::Solve(args) => solve::run(&args),
+        Command::Build(args) => build::run(&args),
+        Command::Table(args) => table::run(&args),
     }
 }

@@ -3,6 +3,8 @@
 //! Adding a row costs one `Qᵀa` and Givens rotations; removing one shifts R's columns
 //! and restores the triangle with Givens rotations. Both are O(n²) and allocate nothing.
 
+use grasp_core::matrix::dot;
+
 /// Factorisation of up to `n` rows in `n` dimensions (n = k + 1, the elastic variable last).
 #[derive(Clone, Debug)]
 pub(crate) struct Factor {
@@ -101,7 +103,8 @@ impl Factor {
                 .sum();
         }
         let tail = self.v[t..].iter().map(|x| x * x).sum::<f64>().sqrt();
-        if !(tail > tol * anorm) {
+        // Also rejects NaN.
+        if tail.partial_cmp(&(tol * anorm)) != Some(std::cmp::Ordering::Greater) {
             return false;
         }
         for j in (t + 1..n).rev() {
@@ -176,10 +179,7 @@ impl Factor {
         // Rᵀ u1 = b_W (forward substitution).
         for i in 0..t {
             let col = &self.r[i * n..i * n + i + 1];
-            let mut s = rhs(self.rows[i]);
-            for j in 0..i {
-                s -= col[j] * self.u1[j];
-            }
+            let s = rhs(self.rows[i]) - dot(&col[..i], &self.u1[..i]);
             self.u1[i] = s / col[i];
         }
         // z* = Q1 u1 − penalty · Q2 Q2ᵀ e_last.

@@ -288,7 +288,8 @@ impl ActiveSetSolver {
 /// What the iteration ended with.
 enum End {
     Optimal,
-    Infeasible,
+    /// With the row the dual phase could not satisfy, or `None` after the elastic phase.
+    Infeasible(Option<usize>),
     IterationLimit,
     Numerical(&'static str),
 }
@@ -356,11 +357,19 @@ impl TorqueSolver for ActiveSetSolver {
                     self.settings.max_iterations
                 )));
             }
-            End::Infeasible => {
+            End::Infeasible(row) => {
                 out.status = Status::Infeasible;
+                let mut blocking = self.blocking_description();
+                let relaxation = match row {
+                    Some(r) => {
+                        blocking.push(self.qp.describe_row(self.h_row[r]));
+                        None
+                    }
+                    None => Some(self.ws.z[k]),
+                };
                 out.reason = Some(Reason::NoAdmissibleTorque {
-                    relaxation: self.ws.z[k],
-                    blocking: self.blocking_description(),
+                    relaxation,
+                    blocking,
                 });
                 out.active_set = None;
             }
@@ -413,8 +422,8 @@ impl ActiveSetSolver {
 struct Iter<'s> {
     s: &'s mut ActiveSetSolver,
     iterations: usize,
-    /// Set by a phase 1 that proved no torque exists.
-    infeasible: bool,
+    /// Set by a dual phase 1 that proved no torque exists: the row it could not satisfy.
+    infeasible: Option<usize>,
     penalty: f64,
     scale: f64,
     bland: bool,
@@ -427,7 +436,7 @@ impl<'s> Iter<'s> {
         Self {
             s,
             iterations: 0,
-            infeasible: false,
+            infeasible: None,
             penalty,
             scale,
             bland: false,
@@ -516,9 +525,11 @@ impl<'s> Iter<'s> {
                     .map(|i| s.null_basis[(i, j)] * (t[i] / s.dinv[i] - s.ws.u[i]))
                     .sum();
             }
-        } else if self.s.settings.phase1 == Phase1::Dual && !self.dual_phase() {
-            self.infeasible = true;
-            return;
+        } else if self.s.settings.phase1 == Phase1::Dual {
+            if let Err(row) = self.dual_phase() {
+                self.infeasible = Some(row);
+                return;
+            }
         }
         // Elastic variable for the rows y0 violates.
         self.refresh_residuals();
@@ -564,9 +575,9 @@ impl<'s> Iter<'s> {
     /// direction `Q2 Q2ᵀ a` and the dual direction `R⁻¹ Q1ᵀ a`, and drops a key-set row
     /// whose multiplier would turn negative. Every iterate is optimal for the rows in
     /// its key set, so the first primal-feasible one is optimal overall; Steps 2–4 then
-    /// confirm it. Returns false when a violated row is a non-negative combination of
-    /// the key set's (no torque exists); each add or drop counts as an iteration.
-    fn dual_phase(&mut self) -> bool {
+    /// confirm it. Fails with the violated row when it is a non-negative combination of
+    /// the key set's rows (no torque exists); each add or drop counts as an iteration.
+    fn dual_phase(&mut self) -> Result<(), usize> {
         let k = self.k();
         let n = k + 1;
         self.add(S_ROW);
@@ -584,12 +595,12 @@ impl<'s> Iter<'s> {
             }
             let p = worst.1;
             if p == usize::MAX {
-                return true;
+                return Ok(());
             }
             let mut lam_p = 0.0;
             loop {
                 if self.iterations >= max_it {
-                    return true;
+                    return Ok(());
                 }
                 self.iterations += 1;
                 let ws = &mut self.s.ws;
@@ -623,7 +634,7 @@ impl<'s> Iter<'s> {
                 };
                 let step = t1.0.min(t2);
                 if step.is_infinite() {
-                    return false;
+                    return Err(p);
                 }
                 for pos in 0..t {
                     let r = ws.factor.lambda(pos);
@@ -666,8 +677,8 @@ impl<'s> Iter<'s> {
 
     fn run(&mut self, warm: &WarmStart<'_>) -> End {
         self.start(warm);
-        if self.infeasible {
-            return End::Infeasible;
+        if let Some(row) = self.infeasible {
+            return End::Infeasible(Some(row));
         }
         let k = self.k();
         let kp = k + 1;
@@ -723,7 +734,7 @@ impl<'s> Iter<'s> {
                 // Stationary with s free: the penalty is too small, or no torque exists.
                 if increases == self.s.settings.penalty_increases {
                     return if self.s.ws.z[k] > self.feas_tol() {
-                        End::Infeasible
+                        End::Infeasible(None)
                     } else {
                         End::Numerical("the elastic variable would not leave the key set's span")
                     };

@@ -312,6 +312,20 @@ impl GeometryFile {
         let jt = Matrix::from_fn(m, nf, |r, c| jt_cols[c][r]);
         let wrench = crate::file::wrench6(&self.wrench)?;
         let mut p = GraspProblem::new(g, jt, wrench, models);
+        p.joint_names =
+            self.fingers
+                .iter()
+                .enumerate()
+                .flat_map(|(k, f)| {
+                    f.joints.iter().enumerate().map(move |(j, joint)| {
+                        match (&joint.name, &f.name) {
+                            (Some(n), _) => n.clone(),
+                            (None, Some(fname)) => format!("{fname}[{j}]"),
+                            (None, None) => format!("finger {k} joint {j}"),
+                        }
+                    })
+                })
+                .collect();
         Options {
             linearization: self.linearization,
             torque_weights: self.torque_weights,

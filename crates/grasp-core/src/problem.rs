@@ -30,6 +30,8 @@ pub struct GraspProblem {
     pub min_normal_force: Option<Vec<f64>>,
     /// A starting torque for the solver (used when feasible).
     pub initial_torque: Option<Vec<f64>>,
+    /// Joint names for reports (from a geometry file; empty when unknown).
+    pub joint_names: Vec<String>,
 }
 
 impl GraspProblem {
@@ -50,7 +52,16 @@ impl GraspProblem {
             torque_limits: None,
             min_normal_force: None,
             initial_torque: None,
+            joint_names: Vec::new(),
         }
+    }
+
+    /// The name of joint `j`: its given name, else `joint j`.
+    pub fn joint_name(&self, j: usize) -> String {
+        self.joint_names
+            .get(j)
+            .cloned()
+            .unwrap_or_else(|| format!("joint {j}"))
     }
 
     /// Number of joints m.

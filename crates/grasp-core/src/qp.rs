@@ -133,13 +133,137 @@ pub struct TorqueQp {
     pub rank_tolerance: f64,
 }
 
+/// The block-diagonal cones of a problem, in contact order.
+struct Cones {
+    s: Matrix,
+    s0: Vec<f64>,
+    row_kinds: Vec<RowKind>,
+    contacts: Vec<ContactBlock>,
+}
+
+fn stack_cones(p: &GraspProblem) -> Cones {
+    let lin = p.linearization;
+    let total: usize = p.contacts.iter().map(|c| lin.rows_for(c)).sum();
+    let mut s = Matrix::zeros(total, p.force_dim());
+    let mut s0 = vec![0.0; total];
+    let mut row_kinds = Vec::with_capacity(total);
+    let mut contacts = Vec::with_capacity(p.contacts.len());
+    let (mut offset, mut row) = (0, 0);
+    for (ci, model) in p.contacts.iter().enumerate() {
+        let cone = inscribed_cone(model, &lin);
+        let r = cone.faces.nrows();
+        for k in 0..r {
+            s.row_mut(row + k)[offset..offset + model.dim()].copy_from_slice(cone.faces.row(k));
+            row_kinds.push(if k + 1 == r {
+                RowKind::NormalForce { contact: ci }
+            } else {
+                RowKind::Face {
+                    contact: ci,
+                    face: k,
+                }
+            });
+        }
+        if let Some(fmin) = &p.min_normal_force {
+            s0[row + r - 1] = fmin[ci];
+        }
+        contacts.push(ContactBlock {
+            model: *model,
+            offset,
+            first_row: row,
+            rows: r,
+        });
+        offset += model.dim();
+        row += r;
+    }
+    Cones {
+        s,
+        s0,
+        row_kinds,
+        contacts,
+    }
+}
+
+/// Rows `±(τ-map)_j · x ≥ −τmax_j` for the limited joints, where `tau_map` gives τ from
+/// the variables (the identity for the torque QP, Jᵀ for the force-space QP).
+fn limit_rows(
+    p: &GraspProblem,
+    tau_map: &Matrix,
+    c0: &mut Vec<f64>,
+    kinds: &mut Vec<RowKind>,
+) -> Matrix {
+    let mut rows = Vec::new();
+    if let Some(limits) = &p.torque_limits {
+        for (j, lim) in limits.iter().enumerate() {
+            if let Some(t) = *lim {
+                for upper in [false, true] {
+                    let sign = if upper { -1.0 } else { 1.0 };
+                    rows.push(tau_map.row(j).iter().map(|v| sign * v).collect::<Vec<_>>());
+                    c0.push(-t);
+                    kinds.push(RowKind::TorqueLimit { joint: j, upper });
+                }
+            }
+        }
+    }
+    Matrix::from_rows(&rows, tau_map.ncols())
+}
+
+/// Orthonormal rows spanning the left null space of `a`, applied to `a_w`: a wrench
+/// with `result · w ≠ 0` makes `a x = −a_w w` unsolvable.
+fn unreachable_map(a: &Matrix, a_w: &Matrix, rank_tolerance: f64) -> Result<Matrix, ModelError> {
+    let p = a.nrows();
+    let d = svd(a)?;
+    let r = d.rank(rank_tolerance);
+    let left_null = Matrix::from_fn(p - r, p, |i, j| d.u[(j, r + i)]);
+    Ok(left_null.matmul(a_w))
+}
+
 impl TorqueQp {
+    /// The contact-force-space QP of the usual two-step method, for comparison: minimise
+    /// `‖f‖²` subject to `G f = w`, the same linearised cones and minimum normal forces,
+    /// and the torque limits applied to `Jᵀ f`. Its "torque" is f itself (`z2 = I`,
+    /// `jacobian_transpose = I`); map the answer through Jᵀ to get joint torques.
+    pub fn force_space(p: &GraspProblem, opts: &ModelOptions) -> Result<Self, ModelError> {
+        if !(opts.rank_tolerance > 0.0 && opts.rank_tolerance < 1.0) {
+            return Err(ModelError::RankTolerance(opts.rank_tolerance));
+        }
+        let n = p.force_dim();
+        let cones = stack_cones(p);
+        let mut row_kinds = cones.row_kinds;
+        let mut c0 = cones.s0;
+        let limits = limit_rows(p, &p.jacobian_transpose, &mut c0, &mut row_kinds);
+        let h = cones.s.vstack(&limits);
+        let hw = Matrix::zeros(h.nrows(), 6);
+        let eq = p.grasp_matrix.clone();
+        let eq_w = Matrix::from_fn(6, 6, |i, j| if i == j { -1.0 } else { 0.0 });
+        let unreachable = unreachable_map(&eq, &eq_w, opts.rank_tolerance)?;
+        Ok(Self {
+            grasp_matrix: p.grasp_matrix.clone(),
+            jacobian_transpose: Matrix::identity(n),
+            z1: Matrix::zeros(n, 6),
+            z2: Matrix::identity(n),
+            rank: n,
+            contacts: cones.contacts,
+            s: cones.s,
+            h,
+            c0,
+            hw,
+            eq,
+            eq_w,
+            unreachable,
+            weights: vec![1.0; n],
+            row_kinds,
+            linearization: p.linearization,
+            equilibrium: Equilibrium::Consistent,
+            rank_tolerance: opts.rank_tolerance,
+        })
+    }
+
     /// Assembles the QP of a validated problem.
     pub fn new(p: &GraspProblem, opts: &ModelOptions) -> Result<Self, ModelError> {
         if !(opts.rank_tolerance > 0.0 && opts.rank_tolerance < 1.0) {
             return Err(ModelError::RankTolerance(opts.rank_tolerance));
         }
-        let (n, m) = (p.force_dim(), p.joints());
+        let m = p.joints();
         let a = p.grasp_matrix.vstack(&p.jacobian_transpose);
         let dec = svd(&a)?;
         let rank = dec.rank(opts.rank_tolerance);
@@ -147,59 +271,14 @@ impl TorqueQp {
         let z1 = z.columns(0, 6);
         let z2 = z.columns(6, 6 + m);
 
-        // Cones, stacked block-diagonally in contact order.
-        let lin = p.linearization;
-        let total_rows: usize = p.contacts.iter().map(|c| lin.rows_for(c)).sum();
-        let mut s = Matrix::zeros(total_rows, n);
-        let mut s0 = vec![0.0; total_rows];
-        let mut row_kinds = Vec::with_capacity(total_rows);
-        let mut contacts = Vec::with_capacity(p.contacts.len());
-        let (mut offset, mut row) = (0, 0);
-        for (ci, model) in p.contacts.iter().enumerate() {
-            let cone = inscribed_cone(model, &lin);
-            let r = cone.faces.nrows();
-            for k in 0..r {
-                s.row_mut(row + k)[offset..offset + model.dim()].copy_from_slice(cone.faces.row(k));
-                row_kinds.push(if k + 1 == r {
-                    RowKind::NormalForce { contact: ci }
-                } else {
-                    RowKind::Face {
-                        contact: ci,
-                        face: k,
-                    }
-                });
-            }
-            if let Some(fmin) = &p.min_normal_force {
-                s0[row + r - 1] = fmin[ci];
-            }
-            contacts.push(ContactBlock {
-                model: *model,
-                offset,
-                first_row: row,
-                rows: r,
-            });
-            offset += model.dim();
-            row += r;
-        }
-        let mut h = s.matmul(&z2);
-        let mut hw = s.matmul(&z1);
-        let mut c0 = s0;
-
+        let cones = stack_cones(p);
+        let s = cones.s;
+        let mut row_kinds = cones.row_kinds;
+        let mut c0 = cones.s0;
         // Torque limits: τ_j ≥ −τmax and −τ_j ≥ −τmax.
-        if let Some(limits) = &p.torque_limits {
-            for (j, lim) in limits.iter().enumerate() {
-                if let Some(t) = *lim {
-                    for upper in [false, true] {
-                        let mut r = Matrix::zeros(1, m);
-                        r[(0, j)] = if upper { -1.0 } else { 1.0 };
-                        h = h.vstack(&r);
-                        hw = hw.vstack(&Matrix::zeros(1, 6));
-                        c0.push(-t);
-                        row_kinds.push(RowKind::TorqueLimit { joint: j, upper });
-                    }
-                }
-            }
-        }
+        let limits = limit_rows(p, &Matrix::identity(m), &mut c0, &mut row_kinds);
+        let h = s.matmul(&z2).vstack(&limits);
+        let hw = s.matmul(&z1).vstack(&Matrix::zeros(limits.nrows(), 6));
 
         // Consistency: U⊥ = columns of U beyond the rank.
         let (eq, eq_w, unreachable) = match opts.equilibrium {
@@ -213,11 +292,8 @@ impl TorqueQp {
                 let u_perp_t = Matrix::from_fn(p_rows, 6 + m, |i, j| dec.u[(j, rank + i)]);
                 let eq = u_perp_t.columns(6, 6 + m);
                 let eq_w = u_perp_t.columns(0, 6);
-                // Rows combinations of C that vanish: their e-part must vanish too.
-                let dc = svd(&eq)?;
-                let rc = dc.rank(opts.rank_tolerance);
-                let left_null = Matrix::from_fn(p_rows - rc, p_rows, |i, j| dc.u[(j, rc + i)]);
-                let unreachable = left_null.matmul(&eq_w);
+                // Row combinations of C that vanish: their e-part must vanish too.
+                let unreachable = unreachable_map(&eq, &eq_w, opts.rank_tolerance)?;
                 (eq, eq_w, unreachable)
             }
         };
@@ -228,7 +304,7 @@ impl TorqueQp {
             z1,
             z2,
             rank,
-            contacts,
+            contacts: cones.contacts,
             s,
             h,
             c0,
@@ -238,7 +314,7 @@ impl TorqueQp {
             unreachable,
             weights: p.torque_weights.clone().unwrap_or_else(|| vec![1.0; m]),
             row_kinds,
-            linearization: lin,
+            linearization: p.linearization,
             equilibrium: opts.equilibrium,
             rank_tolerance: opts.rank_tolerance,
         })

@@ -57,9 +57,9 @@ pub enum Reason {
     },
     /// The linearised cones, the consistency equalities and the options admit no torque.
     NoAdmissibleTorque {
-        /// The smallest uniform relaxation of the normalised rows that the solver found
-        /// would make the problem feasible.
-        relaxation: f64,
+        /// With an elastic start: the smallest uniform relaxation of the normalised rows
+        /// that the solver found would make the problem feasible.
+        relaxation: Option<f64>,
         /// The rows that block, with their descriptions.
         blocking: Vec<String>,
     },
@@ -78,11 +78,13 @@ impl fmt::Display for Reason {
                 f,
                 "row {row} ({description}) is not affected by any joint torque and the wrench violates it by {violation:.3e}"
             ),
-            Reason::NoAdmissibleTorque { relaxation, blocking } => write!(
-                f,
-                "no joint torque keeps every contact force inside its linearised cone while balancing the wrench (the constraints would need relaxing by {relaxation:.3e}; blocking: {})",
-                blocking.join(", ")
-            ),
+            Reason::NoAdmissibleTorque { relaxation, blocking } => {
+                write!(f, "no joint torque keeps every contact force inside its linearised cone while balancing the wrench (")?;
+                if let Some(r) = relaxation {
+                    write!(f, "the rows would need relaxing by {r:.3e}; ")?;
+                }
+                write!(f, "conflicting rows: {})", blocking.join(", "))
+            }
             Reason::Backend(s) => f.write_str(s),
         }
     }
@@ -317,8 +319,8 @@ impl TorqueQp {
             }
         }
         for (i, kind) in self.row_kinds.iter().enumerate() {
-            if let crate::qp::RowKind::TorqueLimit { joint, .. } = *kind {
-                let v = self.c0[i] - self.h[(i, joint)] * tau[joint];
+            if let crate::qp::RowKind::TorqueLimit { .. } = *kind {
+                let v = self.c0[i] - dot(self.h.row(i), tau);
                 d.max_violation = d.max_violation.max(v);
             }
         }

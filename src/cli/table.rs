@@ -1,0 +1,243 @@
+//! `grasp-torque table`: the paper's Table 1 layout, torques before and after, where
+//! "before" is the usual two-step method (optimal contact forces mapped through Jᵀ)
+//! and "after" the torque-space optimum.
+
+use super::format::g;
+use super::load;
+use anyhow::{bail, Result};
+use clap::ValueEnum;
+use grasp_torque::matrix::norm_inf;
+use grasp_torque::{
+    solve, ActiveSetSettings, ActiveSetSolver, GraspProblem, ModelOptions, Solution, Status,
+    TorqueQp, WarmStart,
+};
+use serde_json::json;
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum TableFormat {
+    Markdown,
+    Csv,
+    Json,
+}
+
+#[derive(clap::Args, Debug)]
+pub(crate) struct TableArgs {
+    /// Problem files, one per object.
+    #[arg(required = true)]
+    problems: Vec<PathBuf>,
+    /// N, sides of the inscribed polygons (overrides the files).
+    #[arg(long)]
+    sides: Option<usize>,
+    /// Output format.
+    #[arg(long, value_enum, default_value = "markdown")]
+    format: TableFormat,
+}
+
+/// One object's comparison.
+pub(crate) struct Row {
+    pub(crate) name: String,
+    pub(crate) joints: Vec<String>,
+    pub(crate) before: Vec<f64>,
+    pub(crate) after: Vec<f64>,
+    /// Why the baseline torque is not admissible under the torque model, if it is not.
+    pub(crate) baseline_note: Option<String>,
+}
+
+impl Row {
+    fn sum_abs(t: &[f64]) -> f64 {
+        t.iter().map(|v| v.abs()).sum()
+    }
+    fn sigma(t: &[f64]) -> f64 {
+        t.iter().map(|v| v * v).sum()
+    }
+}
+
+fn native(qp: TorqueQp, w: &[f64; 6]) -> Result<Solution> {
+    let mut s = ActiveSetSolver::new(qp, ActiveSetSettings::default())?;
+    Ok(solve(&mut s, w, &WarmStart::default())?)
+}
+
+/// Solves both problems for one object.
+pub(crate) fn compare(name: String, p: &GraspProblem) -> Result<Row> {
+    let opts = ModelOptions::default();
+    let torque_qp = TorqueQp::new(p, &opts)?;
+    let after = native(torque_qp.clone(), &p.wrench)?;
+    let base = native(TorqueQp::force_space(p, &opts)?, &p.wrench)?;
+    if after.status != Status::Optimal || base.status != Status::Optimal {
+        bail!(
+            "{name}: torque space {} ({}), force space {} ({})",
+            after.status,
+            after
+                .reason
+                .as_ref()
+                .map_or(String::new(), |r| r.to_string()),
+            base.status,
+            base.reason
+                .as_ref()
+                .map_or(String::new(), |r| r.to_string())
+        );
+    }
+    let before = p.jacobian_transpose.mul_vec(&base.torque);
+    // Is the baseline torque admissible under the torque model (consistency, cones)?
+    let mut check = Solution {
+        torque: before.clone(),
+        ..Default::default()
+    };
+    torque_qp.complete(&p.wrench, &mut check);
+    let d = &check.diagnostics;
+    let scale = norm_inf(&p.wrench)
+        .max(norm_inf(&check.contact_forces))
+        .max(f64::MIN_POSITIVE);
+    let tol = 1e-9 * scale;
+    let baseline_note = (d.consistency_residual > tol || d.max_violation > tol).then(|| {
+        format!(
+            "the baseline torque is not admissible under the torque model: ‖C τ − e‖∞ = {:.3e}, largest cone-row violation {:.3e} (the force-space optimum uses passive internal forces in null([G; Jᵀ]), which the model sets to zero)",
+            d.consistency_residual, d.max_violation
+        )
+    });
+    Ok(Row {
+        name,
+        joints: (0..p.joints()).map(|j| p.joint_name(j)).collect(),
+        before,
+        after: after.torque,
+        baseline_note,
+    })
+}
+
+/// Percentage reduction; values within rounding of zero print as 0.
+fn reduction(before: f64, after: f64) -> f64 {
+    let r = if before == 0.0 {
+        0.0
+    } else {
+        100.0 * (before - after) / before
+    };
+    if r.abs() < 1e-9 {
+        0.0
+    } else {
+        r
+    }
+}
+
+pub(crate) fn run(args: &TableArgs) -> Result<u8> {
+    let mut rows = Vec::new();
+    for path in &args.problems {
+        let mut p = load(path)?;
+        if let Some(n) = args.sides {
+            p.linearization.sides = n;
+            p.linearization
+                .validate()
+                .map_err(|e| anyhow::anyhow!("--sides: {e}"))?;
+        }
+        let name = path
+            .file_stem()
+            .map_or("?".into(), |s| s.to_string_lossy().into_owned());
+        rows.push(compare(name, &p)?);
+    }
+    let totals = |f: fn(&[f64]) -> f64, before: bool| -> f64 {
+        rows.iter()
+            .map(|r| f(if before { &r.before } else { &r.after }))
+            .sum()
+    };
+    let (sb, sa) = (totals(Row::sum_abs, true), totals(Row::sum_abs, false));
+    let (qb, qa) = (totals(Row::sigma, true), totals(Row::sigma, false));
+    match args.format {
+        TableFormat::Json => {
+            let objects: Vec<_> = rows
+                .iter()
+                .map(|r| {
+                    json!({
+                        "name": r.name,
+                        "joints": r.joints,
+                        "before": r.before.iter().map(|v| v.abs()).collect::<Vec<_>>(),
+                        "after": r.after.iter().map(|v| v.abs()).collect::<Vec<_>>(),
+                        "sum_abs_before": Row::sum_abs(&r.before),
+                        "sum_abs_after": Row::sum_abs(&r.after),
+                        "sum_abs_reduction_percent": reduction(Row::sum_abs(&r.before), Row::sum_abs(&r.after)),
+                        "sigma_before": Row::sigma(&r.before),
+                        "sigma_after": Row::sigma(&r.after),
+                        "sigma_reduction_percent": reduction(Row::sigma(&r.before), Row::sigma(&r.after)),
+                        "baseline_note": r.baseline_note,
+                    })
+                })
+                .collect();
+            let out = json!({
+                "objects": objects,
+                "overall": {
+                    "sum_abs_before": sb, "sum_abs_after": sa, "sum_abs_reduction_percent": reduction(sb, sa),
+                    "sigma_before": qb, "sigma_after": qa, "sigma_reduction_percent": reduction(qb, qa),
+                }
+            });
+            println!("{}", serde_json::to_string_pretty(&out)?);
+        }
+        TableFormat::Csv => {
+            let joints = &rows[0].joints;
+            println!("object,row,{},sum_abs,sigma", joints.join(","));
+            for r in &rows {
+                for (label, t) in [("before", &r.before), ("after", &r.after)] {
+                    let cells: Vec<String> = t.iter().map(|v| format!("{}", v.abs())).collect();
+                    println!(
+                        "{},{label},{},{},{}",
+                        r.name,
+                        cells.join(","),
+                        Row::sum_abs(t),
+                        Row::sigma(t)
+                    );
+                }
+            }
+            println!(
+                "overall,before,{},{sb},{qb}",
+                vec![""; joints.len()].join(",")
+            );
+            println!(
+                "overall,after,{},{sa},{qa}",
+                vec![""; joints.len()].join(",")
+            );
+        }
+        TableFormat::Markdown => {
+            let joints = &rows[0].joints;
+            println!("Absolute joint torques (N·m): before = contact-force optimum mapped through Jᵀ, after = torque-space optimum.\n");
+            println!("| object | | {} | Σ\\|τ\\| | σ = Στ² |", joints.join(" | "));
+            println!("|---|---|{}---|---|", "---|".repeat(joints.len()));
+            for r in &rows {
+                for (label, t) in [("before", &r.before), ("after", &r.after)] {
+                    let cells: Vec<String> = t.iter().map(|v| format!("{:.4}", v.abs())).collect();
+                    let name = if label == "before" {
+                        r.name.as_str()
+                    } else {
+                        ""
+                    };
+                    println!(
+                        "| {name} | {label} | {} | {:.4} | {} |",
+                        cells.join(" | "),
+                        Row::sum_abs(t),
+                        g(Row::sigma(t), 4)
+                    );
+                }
+                println!(
+                    "| | reduction | {}| {:.1} % | {:.1} % |",
+                    "| ".repeat(joints.len()),
+                    reduction(Row::sum_abs(&r.before), Row::sum_abs(&r.after)),
+                    reduction(Row::sigma(&r.before), Row::sigma(&r.after))
+                );
+            }
+            println!(
+                "| **overall** | reduction | {}| {:.1} % | {:.1} % |",
+                "| ".repeat(joints.len()),
+                reduction(sb, sa),
+                reduction(qb, qa)
+            );
+            for r in &rows {
+                if let Some(n) = &r.baseline_note {
+                    println!("\n{}: {n}", r.name);
+                }
+            }
+        }
+    }
+    for r in &rows {
+        if let Some(n) = &r.baseline_note {
+            eprintln!("warning: {}: {n}", r.name);
+        }
+    }
+    Ok(0)
+}
