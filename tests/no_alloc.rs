@@ -3,21 +3,33 @@
 
 use grasp_torque::{load_problem, GraspSolver, SolverConfig, WarmStart};
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::cell::Cell;
 
 struct Counting;
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
+
+thread_local! {
+    // Per thread: the test harness allocates on its own threads meanwhile.
+    static ALLOCS: Cell<usize> = const { Cell::new(0) };
+}
+
+fn count() {
+    ALLOCS.with(|c| c.set(c.get() + 1));
+}
+
+fn allocations() -> usize {
+    ALLOCS.with(Cell::get)
+}
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
+        count();
         unsafe { System.alloc(l) }
     }
     unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
         unsafe { System.dealloc(p, l) }
     }
     unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
+        count();
         unsafe { System.realloc(p, l, n) }
     }
 }
@@ -44,7 +56,7 @@ fn native_solves_reuse_the_workspace() {
         // Warm up: buffers grow to size once.
         s.solve(&w, &WarmStart::default()).unwrap();
         s.resolve(&w).unwrap();
-        let before = ALLOCS.load(Ordering::Relaxed);
+        let before = allocations();
         for k in 0..50 {
             w[k % 3] *= 1.0 + 0.002 * (k as f64).sin();
             assert!(s.resolve(&w).unwrap().is_optimal());
