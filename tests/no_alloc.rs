@@ -62,10 +62,6 @@ fn native_solves_reuse_the_workspace() {
             assert!(s.resolve(&w).unwrap().is_optimal());
             assert!(s.solve(&w, &WarmStart::default()).unwrap().is_optimal());
         }
-        assert_eq!(
-            ALLOCS.load(Ordering::Relaxed) - before,
-            0,
-            "{name} allocated"
-        );
+        assert_eq!(allocations() - before, 0, "{name} allocated");
     }
 }
