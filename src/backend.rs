@@ -11,6 +11,9 @@ pub enum Backend {
     ActiveSet,
     /// Clarabel's interior-point method (crate `grasp-clarabel`), linearised or exact cones.
     Clarabel,
+    /// OSQP's ADMM with polishing (crate `grasp-osqp`), linearised cones. Opt-in: its
+    /// build needs cmake.
+    Osqp,
 }
 
 /// Which friction cones the backend sees.
@@ -84,13 +87,14 @@ pub enum BackendError {
 
 impl Backend {
     /// Every backend, compiled in or not.
-    pub const ALL: [Backend; 2] = [Backend::ActiveSet, Backend::Clarabel];
+    pub const ALL: [Backend; 3] = [Backend::ActiveSet, Backend::Clarabel, Backend::Osqp];
 
     /// The command-line name.
     pub fn name(&self) -> &'static str {
         match self {
             Backend::ActiveSet => "active-set",
             Backend::Clarabel => "clarabel",
+            Backend::Osqp => "osqp",
         }
     }
 
@@ -104,6 +108,7 @@ impl Backend {
         match self {
             Backend::ActiveSet => cfg!(feature = "active-set"),
             Backend::Clarabel => cfg!(feature = "clarabel"),
+            Backend::Osqp => cfg!(feature = "osqp"),
         }
     }
 
@@ -111,7 +116,7 @@ impl Backend {
     pub fn supports(&self, cones: Cones) -> bool {
         match self {
             Backend::Clarabel => true,
-            Backend::ActiveSet => cones == Cones::Linear,
+            Backend::ActiveSet | Backend::Osqp => cones == Cones::Linear,
         }
     }
 
@@ -172,6 +177,9 @@ pub struct SolverConfig {
     /// Settings of the Clarabel backend.
     #[cfg(feature = "clarabel")]
     pub clarabel: grasp_clarabel::ClarabelSettings,
+    /// Settings of the OSQP backend.
+    #[cfg(feature = "osqp")]
+    pub osqp: grasp_osqp::OsqpSettings,
 }
 
 impl SolverConfig {
@@ -218,6 +226,10 @@ impl SolverConfig {
                     .map(|s| Box::new(s) as Box<dyn TorqueSolver>)
                     .map_err(|e| build_err(&e))
             }
+            #[cfg(feature = "osqp")]
+            Backend::Osqp => grasp_osqp::OsqpSolver::new(qp, self.osqp)
+                .map(|s| Box::new(s) as Box<dyn TorqueSolver>)
+                .map_err(|e| build_err(&e)),
             #[allow(unreachable_patterns)]
             _ => unreachable!("checked by is_compiled"),
         }

@@ -6,6 +6,8 @@ pub use grasp_core::*;
 pub use grasp_active_set::{ActiveSetSettings, ActiveSetSolver, Phase1};
 #[cfg(feature = "clarabel")]
 pub use grasp_clarabel::{ClarabelSettings, ClarabelSolver};
+#[cfg(feature = "osqp")]
+pub use grasp_osqp::{OsqpSettings, OsqpSolver};
 
 mod backend;
 pub use backend::{Backend, BackendError, Cones, SolverConfig};

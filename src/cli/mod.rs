@@ -1,6 +1,7 @@
 //! Command-line parsing and the subcommands.
 
 mod build;
+mod compare;
 mod format;
 mod solve;
 mod table;
@@ -28,6 +29,9 @@ enum Command {
     /// The paper's Table 1: torques before (contact-force optimum mapped through Jᵀ)
     /// and after (torque-space optimum), per object.
     Table(table::TableArgs),
+    /// Every compiled backend on the linearised problem, plus Clarabel on the exact
+    /// cones, with a verdict (exit 5 when they disagree).
+    Compare(compare::CompareArgs),
 }
 
 /// Output format of a report.
@@ -42,7 +46,7 @@ pub(crate) enum Format {
 /// Options shared by the commands that build a model.
 #[derive(clap::Args, Debug, Clone)]
 pub(crate) struct ModelArgs {
-    /// Backend: active-set or clarabel (those compiled in).
+    /// Backend: active-set, clarabel or osqp (those compiled in).
     #[arg(long, default_value = "active-set")]
     backend: String,
     /// Cones: linear (inscribed polyhedra) or exact (clarabel only).
@@ -141,5 +145,6 @@ pub(crate) fn run() -> Result<u8> {
         Command::Solve(args) => solve::run(&args),
         Command::Build(args) => build::run(&args),
         Command::Table(args) => table::run(&args),
+        Command::Compare(args) => compare::run(&args),
     }
 }

@@ -1,0 +1,204 @@
+//! `grasp-torque compare`: every compiled backend on the linearised problem, and
+//! Clarabel on the exact cones, with a verdict.
+
+use super::format::{g, micros};
+use super::{load, Format};
+use anyhow::Result;
+use grasp_torque::matrix::norm_inf;
+use grasp_torque::{solve_into, Backend, Cones, Solution, SolverConfig, Status, TorqueQp, WarmStart};
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Duration;
+
+#[derive(clap::Args, Debug)]
+pub(crate) struct CompareArgs {
+    /// The problem file (JSON).
+    problem: PathBuf,
+    /// N, sides of the inscribed polygons (overrides the file).
+    #[arg(long)]
+    sides: Option<usize>,
+    /// K, latitudes per hemisphere of SFCe polyhedra (overrides the file).
+    #[arg(long)]
+    latitudes: Option<usize>,
+    /// Output format.
+    #[arg(long, value_enum, default_value = "text")]
+    format: Format,
+}
+
+/// Each backend's stated relative accuracy in σ on the linearised problem.
+pub(crate) fn sigma_tolerance(backend: Backend, solution: &Solution) -> f64 {
+    match backend {
+        Backend::ActiveSet => 1e-9,
+        Backend::Clarabel => 1e-6,
+        // Polishing makes OSQP exact on its active set; without it, ADMM accuracy.
+        Backend::Osqp => {
+            if solution.warnings.iter().any(|w| w.contains("polishing did not succeed")) {
+                1e-3
+            } else {
+                1e-6
+            }
+        }
+    }
+}
+
+struct Run {
+    backend: Backend,
+    cones: Cones,
+    solution: Solution,
+    time: Duration,
+}
+
+/// Solves once to warm caches, then reports the median of a few timed solves.
+fn run_backend(qp: &TorqueQp, w: &[f64; 6], backend: Backend, cones: Cones) -> Result<Run> {
+    let config = SolverConfig { backend: Some(backend), cones, ..Default::default() };
+    let mut solver = config.build(qp.clone())?;
+    let mut solution = Solution::default();
+    let mut times = Vec::new();
+    for _ in 0..7 {
+        solve_into(solver.as_mut(), w, &WarmStart::default(), &mut solution)?;
+        times.push(solution.solve_time);
+    }
+    times.sort();
+    Ok(Run { backend, cones, solution, time: times[times.len() / 2] })
+}
+
+pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
+    let mut p = load(&args.problem)?;
+    if let Some(n) = args.sides {
+        p.linearization.sides = n;
+    }
+    if let Some(k) = args.latitudes {
+        p.linearization.latitudes = k;
+    }
+    p.linearization.validate().map_err(|e| anyhow::anyhow!("{}", e.to_string().replace("linearization.", "--")))?;
+    let qp = TorqueQp::new(&p, &Default::default())?;
+    let w = p.wrench;
+    let mut runs = Vec::new();
+    for b in Backend::compiled() {
+        runs.push(run_backend(&qp, &w, b, Cones::Linear)?);
+    }
+    if Backend::Clarabel.is_compiled() {
+        runs.push(run_backend(&qp, &w, Backend::Clarabel, Cones::Exact)?);
+    }
+    let reference = runs.iter().find(|r| r.backend == Backend::ActiveSet && r.cones == Cones::Linear);
+    let tau_ref: Option<Vec<f64>> = reference.filter(|r| r.solution.is_optimal()).map(|r| r.solution.torque.clone());
+    let mut problems = Vec::new();
+    let linear: Vec<&Run> = runs.iter().filter(|r| r.cones == Cones::Linear).collect();
+    if let Some(first) = linear.first() {
+        for r in &linear {
+            if r.solution.status != first.solution.status {
+                problems.push(format!(
+                    "{}: status {} but {} says {}",
+                    r.backend, r.solution.status, first.backend, first.solution.status
+                ));
+                continue;
+            }
+            if !r.solution.is_optimal() || !first.solution.is_optimal() {
+                continue;
+            }
+            let tol = sigma_tolerance(r.backend, &r.solution).max(sigma_tolerance(first.backend, &first.solution));
+            let (a, b) = (r.solution.objective, first.solution.objective);
+            let rel = (a - b).abs() / a.abs().max(b.abs()).max(f64::MIN_POSITIVE);
+            if rel > tol {
+                problems.push(format!("{}: σ differs from {} by {rel:.2e} relative (tolerance {tol:.0e})", r.backend, first.backend));
+            }
+            // A strongly convex objective: τ within √tol of the optimum, relative.
+            let dt = max_diff(&r.solution.torque, &first.solution.torque);
+            let ttol = tol.sqrt() * norm_inf(&first.solution.torque).max(f64::MIN_POSITIVE);
+            if dt > ttol {
+                problems.push(format!("{}: τ differs from {} by {dt:.2e} (tolerance {ttol:.1e})", r.backend, first.backend));
+            }
+        }
+    }
+    if let Some(exact) = runs.iter().find(|r| r.cones == Cones::Exact) {
+        for r in &linear {
+            match (exact.solution.status, r.solution.status) {
+                (Status::Optimal, Status::Optimal) => {
+                    let tol = 1e-6 * r.solution.objective.abs().max(f64::MIN_POSITIVE);
+                    if exact.solution.objective > r.solution.objective + tol {
+                        problems.push(format!(
+                            "exact σ* = {} exceeds {}'s linearised σ = {} (the cones are inscribed)",
+                            exact.solution.objective, r.backend, r.solution.objective
+                        ));
+                    }
+                }
+                (Status::Infeasible, Status::Optimal) => problems.push(format!(
+                    "exact cones infeasible but {} found a linearised optimum (inscribed cones cannot be larger)",
+                    r.backend
+                )),
+                _ => {}
+            }
+        }
+    }
+    let agree = problems.is_empty();
+    match args.format {
+        Format::Json => {
+            let rows: Vec<_> = runs
+                .iter()
+                .map(|r| {
+                    let s = &r.solution;
+                    let ok = !s.torque.is_empty();
+                    json!({
+                        "backend": r.backend.name(),
+                        "cones": r.cones.name(),
+                        "status": s.status.as_str(),
+                        "objective": if ok { json!(s.objective) } else { json!(null) },
+                        "max_torque_difference": match (&tau_ref, ok) { (Some(t), true) => json!(max_diff(&s.torque, t)), _ => json!(null) },
+                        "iterations": s.iterations,
+                        "solve_time_us": r.time.as_secs_f64() * 1e6,
+                        "wrench_residual": if ok { json!(s.diagnostics.wrench_residual) } else { json!(null) },
+                        "min_friction_margin": if ok { json!(min_margin(s)) } else { json!(null) },
+                        "sigma_tolerance": if r.cones == Cones::Linear { json!(sigma_tolerance(r.backend, s)) } else { json!(null) },
+                    })
+                })
+                .collect();
+            let out = json!({"sides": p.linearization.sides, "latitudes": p.linearization.latitudes, "runs": rows, "agree": agree, "disagreements": problems});
+            println!("{}", serde_json::to_string_pretty(&out)?);
+        }
+        Format::Text => {
+            println!("problem {}  (N = {}, K = {})\n", args.problem.display(), p.linearization.sides, p.linearization.latitudes);
+            println!(
+                "{:<11} {:<7} {:<18} {:>14} {:>12} {:>6} {:>11} {:>10} {:>10}",
+                "backend", "cones", "status", "σ", "max|Δτ|", "iter", "time", "‖Gf−w‖∞", "min margin"
+            );
+            for r in &runs {
+                let s = &r.solution;
+                let ok = !s.torque.is_empty();
+                let dash = || "—".to_string();
+                println!(
+                    "{:<11} {:<7} {:<18} {:>14} {:>12} {:>6} {:>11} {:>10} {:>10}",
+                    r.backend.name(),
+                    r.cones.name(),
+                    s.status.as_str(),
+                    if ok { g(s.objective, 10) } else { dash() },
+                    match (&tau_ref, ok) {
+                        (Some(t), true) => g(max_diff(&s.torque, t), 3),
+                        _ => dash(),
+                    },
+                    s.iterations,
+                    micros(r.time),
+                    if ok { g(s.diagnostics.wrench_residual, 2) } else { dash() },
+                    if ok { g(min_margin(s), 3) } else { dash() },
+                );
+            }
+            println!();
+            if agree {
+                println!("verdict: agree (linearised backends within their tolerances; exact σ* ≤ every linearised σ)");
+            } else {
+                println!("verdict: DISAGREE");
+                for d in &problems {
+                    println!("  - {d}");
+                }
+            }
+        }
+    }
+    Ok(if agree { 0 } else { 5 })
+}
+
+fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+}
+
+fn min_margin(s: &Solution) -> f64 {
+    s.diagnostics.friction_margins.iter().copied().fold(f64::INFINITY, f64::min)
+}
