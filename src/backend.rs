@@ -235,3 +235,53 @@ impl SolverConfig {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn qp() -> TorqueQp {
+        let p = grasp_core::load_problem(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fixtures/paper-example.json"
+        ))
+        .unwrap();
+        TorqueQp::new(&p, &ModelOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn a_backend_not_compiled_in_names_its_feature() {
+        for b in Backend::ALL.into_iter().filter(|b| !b.is_compiled()) {
+            let config = SolverConfig {
+                backend: Some(b),
+                ..Default::default()
+            };
+            let err = config.build(qp()).err().expect("not compiled").to_string();
+            assert!(
+                err.contains(&format!("--features {}", b.feature())),
+                "{err}"
+            );
+        }
+    }
+
+    #[test]
+    fn unsupported_cones_list_the_supported_pairs() {
+        let config = SolverConfig {
+            backend: Some(Backend::ActiveSet),
+            cones: Cones::Exact,
+            ..Default::default()
+        };
+        if Backend::ActiveSet.is_compiled() {
+            let err = config.build(qp()).err().expect("unsupported").to_string();
+            assert!(err.contains("clarabel/exact"), "{err}");
+        }
+    }
+
+    #[test]
+    fn names_round_trip() {
+        for b in Backend::ALL {
+            assert_eq!(b.name().parse::<Backend>().unwrap(), b);
+        }
+        assert!("cplex".parse::<Backend>().is_err());
+    }
+}

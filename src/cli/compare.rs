@@ -5,7 +5,9 @@ use super::format::{g, micros};
 use super::{load, Format};
 use anyhow::Result;
 use grasp_torque::matrix::norm_inf;
-use grasp_torque::{solve_into, Backend, Cones, Solution, SolverConfig, Status, TorqueQp, WarmStart};
+use grasp_torque::{
+    solve_into, Backend, Cones, Solution, SolverConfig, Status, TorqueQp, WarmStart,
+};
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -32,7 +34,11 @@ pub(crate) fn sigma_tolerance(backend: Backend, solution: &Solution) -> f64 {
         Backend::Clarabel => 1e-6,
         // Polishing makes OSQP exact on its active set; without it, ADMM accuracy.
         Backend::Osqp => {
-            if solution.warnings.iter().any(|w| w.contains("polishing did not succeed")) {
+            if solution
+                .warnings
+                .iter()
+                .any(|w| w.contains("polishing did not succeed"))
+            {
                 1e-3
             } else {
                 1e-6
@@ -50,7 +56,11 @@ struct Run {
 
 /// Solves once to warm caches, then reports the median of a few timed solves.
 fn run_backend(qp: &TorqueQp, w: &[f64; 6], backend: Backend, cones: Cones) -> Result<Run> {
-    let config = SolverConfig { backend: Some(backend), cones, ..Default::default() };
+    let config = SolverConfig {
+        backend: Some(backend),
+        cones,
+        ..Default::default()
+    };
     let mut solver = config.build(qp.clone())?;
     let mut solution = Solution::default();
     let mut times = Vec::new();
@@ -59,7 +69,12 @@ fn run_backend(qp: &TorqueQp, w: &[f64; 6], backend: Backend, cones: Cones) -> R
         times.push(solution.solve_time);
     }
     times.sort();
-    Ok(Run { backend, cones, solution, time: times[times.len() / 2] })
+    Ok(Run {
+        backend,
+        cones,
+        solution,
+        time: times[times.len() / 2],
+    })
 }
 
 pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
@@ -70,7 +85,9 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
     if let Some(k) = args.latitudes {
         p.linearization.latitudes = k;
     }
-    p.linearization.validate().map_err(|e| anyhow::anyhow!("{}", e.to_string().replace("linearization.", "--")))?;
+    p.linearization
+        .validate()
+        .map_err(|e| anyhow::anyhow!("{}", e.to_string().replace("linearization.", "--")))?;
     let qp = TorqueQp::new(&p, &Default::default())?;
     let w = p.wrench;
     let mut runs = Vec::new();
@@ -80,8 +97,12 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
     if Backend::Clarabel.is_compiled() {
         runs.push(run_backend(&qp, &w, Backend::Clarabel, Cones::Exact)?);
     }
-    let reference = runs.iter().find(|r| r.backend == Backend::ActiveSet && r.cones == Cones::Linear);
-    let tau_ref: Option<Vec<f64>> = reference.filter(|r| r.solution.is_optimal()).map(|r| r.solution.torque.clone());
+    let reference = runs
+        .iter()
+        .find(|r| r.backend == Backend::ActiveSet && r.cones == Cones::Linear);
+    let tau_ref: Option<Vec<f64>> = reference
+        .filter(|r| r.solution.is_optimal())
+        .map(|r| r.solution.torque.clone());
     let mut problems = Vec::new();
     let linear: Vec<&Run> = runs.iter().filter(|r| r.cones == Cones::Linear).collect();
     if let Some(first) = linear.first() {
@@ -96,17 +117,24 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
             if !r.solution.is_optimal() || !first.solution.is_optimal() {
                 continue;
             }
-            let tol = sigma_tolerance(r.backend, &r.solution).max(sigma_tolerance(first.backend, &first.solution));
+            let tol = sigma_tolerance(r.backend, &r.solution)
+                .max(sigma_tolerance(first.backend, &first.solution));
             let (a, b) = (r.solution.objective, first.solution.objective);
             let rel = (a - b).abs() / a.abs().max(b.abs()).max(f64::MIN_POSITIVE);
             if rel > tol {
-                problems.push(format!("{}: σ differs from {} by {rel:.2e} relative (tolerance {tol:.0e})", r.backend, first.backend));
+                problems.push(format!(
+                    "{}: σ differs from {} by {rel:.2e} relative (tolerance {tol:.0e})",
+                    r.backend, first.backend
+                ));
             }
             // A strongly convex objective: τ within √tol of the optimum, relative.
             let dt = max_diff(&r.solution.torque, &first.solution.torque);
             let ttol = tol.sqrt() * norm_inf(&first.solution.torque).max(f64::MIN_POSITIVE);
             if dt > ttol {
-                problems.push(format!("{}: τ differs from {} by {dt:.2e} (tolerance {ttol:.1e})", r.backend, first.backend));
+                problems.push(format!(
+                    "{}: τ differs from {} by {dt:.2e} (tolerance {ttol:.1e})",
+                    r.backend, first.backend
+                ));
             }
         }
     }
@@ -156,10 +184,23 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
             println!("{}", serde_json::to_string_pretty(&out)?);
         }
         Format::Text => {
-            println!("problem {}  (N = {}, K = {})\n", args.problem.display(), p.linearization.sides, p.linearization.latitudes);
+            println!(
+                "problem {}  (N = {}, K = {})\n",
+                args.problem.display(),
+                p.linearization.sides,
+                p.linearization.latitudes
+            );
             println!(
                 "{:<11} {:<7} {:<18} {:>14} {:>12} {:>6} {:>11} {:>10} {:>10}",
-                "backend", "cones", "status", "σ", "max|Δτ|", "iter", "time", "‖Gf−w‖∞", "min margin"
+                "backend",
+                "cones",
+                "status",
+                "σ",
+                "max|Δτ|",
+                "iter",
+                "time",
+                "‖Gf−w‖∞",
+                "min margin"
             );
             for r in &runs {
                 let s = &r.solution;
@@ -177,7 +218,11 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
                     },
                     s.iterations,
                     micros(r.time),
-                    if ok { g(s.diagnostics.wrench_residual, 2) } else { dash() },
+                    if ok {
+                        g(s.diagnostics.wrench_residual, 2)
+                    } else {
+                        dash()
+                    },
                     if ok { g(min_margin(s), 3) } else { dash() },
                 );
             }
@@ -196,9 +241,16 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
 }
 
 fn max_diff(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
 }
 
 fn min_margin(s: &Solution) -> f64 {
-    s.diagnostics.friction_margins.iter().copied().fold(f64::INFINITY, f64::min)
+    s.diagnostics
+        .friction_margins
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min)
 }

@@ -16,11 +16,12 @@ const OSQP_INFTY: f64 = 1e30;
 /// Settings passed to OSQP.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OsqpSettings {
-    /// Absolute tolerance. Default 1e-9.
+    /// Absolute tolerance. Default 1e-7: tighter makes ADMM run to its cap on badly
+    /// scaled grasps; polishing recovers the accuracy where it succeeds.
     pub eps_abs: f64,
-    /// Relative tolerance. Default 1e-9.
+    /// Relative tolerance. Default 1e-7.
     pub eps_rel: f64,
-    /// ADMM iteration cap. Default 50 000.
+    /// ADMM iteration cap. Default 200 000 (badly scaled grasps need tens of thousands).
     pub max_iter: u32,
     /// Polish the ADMM answer by solving the equality QP on its guessed active set.
     /// Default true.
@@ -30,9 +31,9 @@ pub struct OsqpSettings {
 impl Default for OsqpSettings {
     fn default() -> Self {
         Self {
-            eps_abs: 1e-9,
-            eps_rel: 1e-9,
-            max_iter: 50_000,
+            eps_abs: 1e-7,
+            eps_rel: 1e-7,
+            max_iter: 200_000,
             polish: true,
         }
     }
@@ -76,20 +77,20 @@ impl OsqpSolver {
         let p = CscMatrix::from_column_iter_dense(
             m,
             m,
-            (0..m).flat_map(|j| (0..m).map(move |i| (i, j))).map(|(i, j)| {
-                if i == j {
-                    2.0 * qp.weights[i]
-                } else {
-                    0.0
-                }
-            }),
+            (0..m)
+                .flat_map(|j| (0..m).map(move |i| (i, j)))
+                .map(|(i, j)| if i == j { 2.0 * qp.weights[i] } else { 0.0 }),
         )
         .into_upper_tri();
         let a = CscMatrix::from_row_iter_dense(
             rows,
             m,
             (0..rows).flat_map(|i| {
-                let row = if i < p_eq { qp.eq.row(i) } else { qp.h.row(i - p_eq) };
+                let row = if i < p_eq {
+                    qp.eq.row(i)
+                } else {
+                    qp.h.row(i - p_eq)
+                };
                 row.to_vec()
             }),
         );
@@ -103,8 +104,8 @@ impl OsqpSolver {
         let lower = vec![0.0; rows];
         let mut upper = vec![OSQP_INFTY; rows];
         upper[..p_eq].iter_mut().for_each(|u| *u = 0.0);
-        let problem =
-            Problem::new(&p, &vec![0.0; m], &a, &lower, &upper, &s).map_err(|e| OsqpError(format!("{e:?}")))?;
+        let problem = Problem::new(&p, &vec![0.0; m], &a, &lower, &upper, &s)
+            .map_err(|e| OsqpError(format!("{e:?}")))?;
         Ok(Self {
             problem,
             lower,
@@ -178,7 +179,8 @@ impl TorqueSolver for OsqpSolver {
         if let Some((x, y, polish)) = x {
             out.torque.extend_from_slice(x);
             // OSQP's y is the multiplier of l ≤ A x ≤ u with y < 0 on active lower bounds.
-            out.multipliers.extend(y[p_eq..].iter().map(|v| (-v).max(0.0)));
+            out.multipliers
+                .extend(y[p_eq..].iter().map(|v| (-v).max(0.0)));
             self.polished = polish == PolishStatus::Successful;
             if !self.polished {
                 out.warnings.push(format!(

@@ -1,0 +1,200 @@
+//! Backends agree: property tests on synthetic grasps (all four contact models mixed)
+//! and the reference cases' exact and linearised objectives.
+#![cfg(feature = "clarabel")]
+
+use grasp_torque::file::MatrixFile;
+use grasp_torque::matrix::norm_inf;
+use grasp_torque::synth::{synthetic_grasp, SynthSpec};
+use grasp_torque::{
+    solve, Backend, Cones, GraspProblem, Solution, SolverConfig, Status, TorqueQp, WarmStart,
+};
+use proptest::prelude::*;
+
+fn run(p: &GraspProblem, backend: Backend, cones: Cones) -> Solution {
+    let config = SolverConfig {
+        backend: Some(backend),
+        cones,
+        ..Default::default()
+    };
+    let qp = TorqueQp::new(p, &config.model).unwrap();
+    let mut s = config.build(qp).unwrap();
+    solve(s.as_mut(), &p.wrench, &WarmStart::default()).unwrap()
+}
+
+fn problem(seed: u64, sides: usize) -> GraspProblem {
+    let mut spec = SynthSpec::default();
+    spec.linearization.sides = sides;
+    synthetic_grasp(seed, &spec).into_problem().unwrap()
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
+}
+
+/// Every optimal answer holds the object, satisfies the consistency equalities and
+/// stays in its cones: the exact ones for exact backends, the linearised rows otherwise.
+fn physically_consistent(
+    p: &GraspProblem,
+    s: &Solution,
+    cones: Cones,
+) -> Result<(), TestCaseError> {
+    let d = &s.diagnostics;
+    let scale = norm_inf(&p.wrench)
+        .max(norm_inf(&s.contact_forces))
+        .max(1e-12);
+    // Interior-point answers are accurate to their tolerance (1e-10), not to rounding.
+    let tol = 1e-7 * scale;
+    prop_assert!(
+        d.wrench_residual <= tol,
+        "‖Gf − w‖∞ = {}",
+        d.wrench_residual
+    );
+    prop_assert!(
+        d.consistency_residual <= tol,
+        "‖Cτ − e‖∞ = {}",
+        d.consistency_residual
+    );
+    match cones {
+        Cones::Linear => prop_assert!(
+            d.max_violation <= tol,
+            "linearised violation {}",
+            d.max_violation
+        ),
+        Cones::Exact => {
+            prop_assert!(
+                d.friction_margins.iter().all(|&m| m >= -1e-6),
+                "{:?}",
+                d.friction_margins
+            )
+        }
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
+
+    #[test]
+    fn native_and_clarabel_agree_on_the_linearised_problem(seed in any::<u64>(), sides in prop::sample::select(vec![4usize, 8, 16])) {
+        let p = problem(seed, sides);
+        let a = run(&p, Backend::ActiveSet, Cones::Linear);
+        let b = run(&p, Backend::Clarabel, Cones::Linear);
+        prop_assert_eq!(a.status, b.status, "native {:?} / clarabel {:?}", a.reason, b.reason);
+        if a.status == Status::Optimal {
+            prop_assert!(rel(a.objective, b.objective) <= 1e-6, "{} vs {}", a.objective, b.objective);
+            physically_consistent(&p, &a, Cones::Linear)?;
+            physically_consistent(&p, &b, Cones::Linear)?;
+        }
+    }
+
+    #[test]
+    fn exact_optimum_is_below_every_linearisation_and_refinement_helps(seed in any::<u64>()) {
+        let exact = run(&problem(seed, 8), Backend::Clarabel, Cones::Exact);
+        let sigmas: Vec<Solution> = [4usize, 8, 16, 32].iter().map(|&n| run(&problem(seed, n), Backend::ActiveSet, Cones::Linear)).collect();
+        for s in &sigmas {
+            if s.status == Status::Optimal {
+                // Inscribed cones: feasible linearised ⇒ feasible exact, with σ* ≤ σ(N).
+                prop_assert_eq!(exact.status, Status::Optimal, "{:?}", exact.reason);
+                prop_assert!(exact.objective <= s.objective * (1.0 + 1e-6) + 1e-12, "σ* {} > σ(N) {}", exact.objective, s.objective);
+            }
+        }
+        if exact.status == Status::Optimal {
+            physically_consistent(&problem(seed, 8), &exact, Cones::Exact)?;
+        }
+        // The 2N-gon contains the N-gon: σ(2N) ≤ σ(N), and feasibility is kept.
+        for w in sigmas.windows(2) {
+            if w[0].status == Status::Optimal {
+                prop_assert_eq!(w[1].status, Status::Optimal);
+                prop_assert!(w[1].objective <= w[0].objective * (1.0 + 1e-9) + 1e-15, "{} > {}", w[1].objective, w[0].objective);
+            }
+        }
+    }
+}
+
+#[cfg(feature = "osqp")]
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+    #[test]
+    fn osqp_agrees_to_its_stated_tolerance(seed in any::<u64>()) {
+        let p = problem(seed, 8);
+        let a = run(&p, Backend::ActiveSet, Cones::Linear);
+        let b = run(&p, Backend::Osqp, Cones::Linear);
+        prop_assert_eq!(a.status, b.status, "native {:?} / osqp {:?}", a.reason, b.reason);
+        if a.status == Status::Optimal {
+            let polished = !b.warnings.iter().any(|w| w.contains("polishing did not succeed"));
+            let tol = grasp_torque::OsqpSettings::stated_tolerance(polished);
+            prop_assert!(rel(a.objective, b.objective) <= tol, "{} vs {} (polished {})", a.objective, b.objective, polished);
+        }
+    }
+}
+
+fn reference_cases() -> Vec<serde_json::Value> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/reference-cases.json"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    v["cases"].as_array().unwrap().clone()
+}
+
+#[test]
+fn reference_objectives_are_reproduced_by_every_backend() {
+    let mut backends = vec![(Backend::ActiveSet, 1e-6), (Backend::Clarabel, 1e-6)];
+    if Backend::Osqp.is_compiled() {
+        backends.push((Backend::Osqp, 1e-3));
+    }
+    let mut checked = 0;
+    for case in reference_cases() {
+        let file: MatrixFile = serde_json::from_value(case["problem"].clone()).unwrap();
+        let mut p = file.into_problem().unwrap();
+        let name = case["name"].as_str().unwrap();
+        let exact = run(&p, Backend::Clarabel, Cones::Exact);
+        let want = case["reference"]["exact"]["objective"].as_f64().unwrap();
+        assert_eq!(exact.status, Status::Optimal, "{name}");
+        assert!(
+            rel(exact.objective, want) <= 1e-6,
+            "{name} exact: {} vs {want}",
+            exact.objective
+        );
+        for (variant, sides) in [("N4", 4), ("N8", 8), ("N16", 16)] {
+            p.linearization.sides = sides;
+            let want = case["reference"][variant]["objective"].as_f64().unwrap();
+            for &(b, tol) in &backends {
+                let s = run(&p, b, Cones::Linear);
+                assert_eq!(s.status, Status::Optimal, "{name} {variant} {b}");
+                assert!(
+                    rel(s.objective, want) <= tol,
+                    "{name} {variant} {b}: {} vs {want}",
+                    s.objective
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 41 * 3 * backends.len());
+}
+
+#[test]
+fn compare_agrees_on_every_fixture() {
+    let mut files = Vec::new();
+    for dir in ["fixtures", "fixtures/table1"] {
+        for e in std::fs::read_dir(format!("{}/{dir}", env!("CARGO_MANIFEST_DIR"))).unwrap() {
+            let path = e.unwrap().path();
+            if path.extension().is_some_and(|x| x == "json") {
+                files.push(path);
+            }
+        }
+    }
+    assert!(files.len() >= 12);
+    for f in files {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
+            .args(["compare", f.to_str().unwrap(), "--format", "json"])
+            .output()
+            .unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(out.status.code(), Some(0), "{f:?}: {}", v["disagreements"]);
+        assert_eq!(v["agree"], true);
+    }
+}
