@@ -11,6 +11,7 @@ pub use grasp_osqp::{OsqpSettings, OsqpSolver};
 
 mod backend;
 pub use backend::{Backend, BackendError, Cones, SolverConfig};
+pub mod sweep;
 
 /// Anything that stops a problem from being set up.
 #[derive(Debug, thiserror::Error)]

@@ -4,6 +4,7 @@ mod build;
 mod compare;
 mod format;
 mod solve;
+mod sweep;
 mod table;
 
 use anyhow::{bail, Context, Result};
@@ -32,6 +33,9 @@ enum Command {
     /// Every compiled backend on the linearised problem, plus Clarabel on the exact
     /// cones, with a verdict (exit 5 when they disagree).
     Compare(compare::CompareArgs),
+    /// σ(N) against the exact optimum σ*, with rows, iterations and time per N (and per
+    /// K for SFCe): the paper's Figure 9, quantitative.
+    Sweep(sweep::SweepArgs),
 }
 
 /// Output format of a report.
@@ -146,5 +150,6 @@ pub(crate) fn run() -> Result<u8> {
         Command::Build(args) => build::run(&args),
         Command::Table(args) => table::run(&args),
         Command::Compare(args) => compare::run(&args),
+        Command::Sweep(args) => sweep::run(&args),
     }
 }

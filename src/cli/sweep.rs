@@ -1,0 +1,377 @@
+//! `grasp-torque sweep`: σ(N) against σ*, with rows, iterations and time, as text,
+//! JSON, CSV and an SVG figure (the paper's Figure 9, quantitative).
+
+use super::format::g;
+use super::{load, Format, Spacing};
+use anyhow::{bail, Context, Result};
+use grasp_torque::sweep::{sweep, Sweep, SweepConfig};
+use grasp_torque::{Backend, SfceSpacing};
+use plotters::prelude::*;
+use serde_json::json;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args, Debug)]
+pub(crate) struct SweepArgs {
+    /// The problem file (JSON).
+    problem: PathBuf,
+    /// Values of N: a range `3..64` (inclusive) or a list `4,8,16,32`.
+    #[arg(long, default_value = "3..64")]
+    sides: String,
+    /// Values of K for SFCe contacts: a range `1..8` or a list.
+    #[arg(long, default_value = "2")]
+    latitudes: String,
+    /// SFCe latitude placement: paper (eq. 13) or uniform (ellipse angle).
+    #[arg(long, value_enum)]
+    sfce_spacing: Option<Spacing>,
+    /// Backend for the linearised problems.
+    #[arg(long, default_value = "active-set")]
+    backend: String,
+    /// Timed solves per row (the median is reported).
+    #[arg(long, default_value_t = 21)]
+    repeats: usize,
+    /// Write every row as CSV here.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Write the figure as SVG here.
+    #[arg(long)]
+    svg: Option<PathBuf>,
+    /// Output format on stdout.
+    #[arg(long, value_enum, default_value = "text")]
+    format: Format,
+}
+
+/// `a..b` (inclusive) or `a,b,c`, each value in `lo..=hi`.
+fn parse_values(flag: &str, text: &str, lo: usize, hi: usize) -> Result<Vec<usize>> {
+    let parse = |s: &str| -> Result<usize> {
+        let v: usize = s
+            .trim()
+            .parse()
+            .with_context(|| format!("{flag}: `{}` is not a whole number", s.trim()))?;
+        if !(lo..=hi).contains(&v) {
+            bail!("{flag}: {v} is outside {lo}..{hi}");
+        }
+        Ok(v)
+    };
+    let values = if let Some((a, b)) = text.split_once("..") {
+        let (a, b) = (parse(a)?, parse(b)?);
+        if a > b {
+            bail!("{flag}: empty range {a}..{b}");
+        }
+        (a..=b).collect()
+    } else {
+        text.split(',').map(parse).collect::<Result<Vec<_>>>()?
+    };
+    if values.is_empty() {
+        bail!("{flag}: no values");
+    }
+    Ok(values)
+}
+
+pub(crate) fn run(args: &SweepArgs) -> Result<u8> {
+    let p = load(&args.problem)?;
+    let sides = parse_values("--sides", &args.sides, 3, grasp_torque::cone::MAX_SIDES)?;
+    let latitudes = parse_values(
+        "--latitudes",
+        &args.latitudes,
+        1,
+        grasp_torque::cone::MAX_LATITUDES,
+    )?;
+    let backend: Backend = args
+        .backend
+        .parse()
+        .map_err(|e: String| anyhow::anyhow!("--backend: {e}"))?;
+    if args.repeats == 0 {
+        bail!("--repeats: expected at least 1");
+    }
+    let config = SweepConfig {
+        sides,
+        latitudes,
+        spacing: args.sfce_spacing.map(|s| match s {
+            Spacing::Paper => SfceSpacing::Paper,
+            Spacing::Uniform => SfceSpacing::Uniform,
+        }),
+        backend,
+        repeats: args.repeats,
+    };
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{msg} [{bar:30}] {pos}/{len} linearisations, {elapsed}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.set_message("sweep");
+    let result = sweep(&p, &config, |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })?;
+    bar.finish_and_clear();
+    if let Some(path) = &args.csv {
+        write_csv(path, &result)?;
+    }
+    if let Some(path) = &args.svg {
+        plot(path, &args.problem.display().to_string(), &result)
+            .map_err(|e| anyhow::anyhow!("--svg {}: {e}", path.display()))?;
+    }
+    match args.format {
+        Format::Json => println!("{}", serde_json::to_string_pretty(&to_json(&result))?),
+        Format::Text => print_text(&args.problem, &result),
+    }
+    Ok(0)
+}
+
+fn to_json(s: &Sweep) -> serde_json::Value {
+    json!({
+        "exact_objective": s.exact_objective,
+        "exact_time_us": s.exact_time_us,
+        "repeats": s.repeats,
+        "rows": s.rows.iter().map(|r| json!({
+            "sides": r.sides,
+            "latitudes": r.latitudes,
+            "status": r.status.as_str(),
+            "objective": r.objective,
+            "gap": r.gap,
+            "constraint_rows": r.constraint_rows,
+            "iterations": r.iterations,
+            "solve_time_us": r.solve_time_us,
+        })).collect::<Vec<_>>(),
+    })
+}
+
+fn write_csv(path: &Path, s: &Sweep) -> Result<()> {
+    let mut f = std::fs::File::create(path).with_context(|| format!("--csv {}", path.display()))?;
+    writeln!(f, "sides,latitudes,status,objective,exact_objective,gap,constraint_rows,iterations,solve_time_us,repeats")?;
+    let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x}"));
+    for r in &s.rows {
+        writeln!(
+            f,
+            "{},{},{},{},{},{},{},{},{},{}",
+            r.sides,
+            r.latitudes,
+            r.status.as_str(),
+            opt(r.objective),
+            opt(s.exact_objective),
+            opt(r.gap),
+            r.constraint_rows,
+            r.iterations,
+            r.solve_time_us,
+            s.repeats
+        )?;
+    }
+    Ok(())
+}
+
+fn print_text(problem: &Path, s: &Sweep) {
+    println!("problem {}", problem.display());
+    match (s.exact_objective, s.exact_time_us) {
+        (Some(e), Some(t)) => println!("exact cones (clarabel): σ* = {}  ({:.1} µs)", g(e, 10), t),
+        _ => println!("exact cones: unavailable (clarabel not compiled in, or not optimal)"),
+    }
+    println!("median of {} solves per row\n", s.repeats);
+    println!(
+        "{:>5} {:>3} {:>6} {:>16} {:>11} {:>6} {:>10}",
+        "N", "K", "rows", "σ(N)", "gap", "iter", "time µs"
+    );
+    for r in &s.rows {
+        println!(
+            "{:>5} {:>3} {:>6} {:>16} {:>11} {:>6} {:>10.2}",
+            r.sides,
+            r.latitudes,
+            r.constraint_rows,
+            r.objective
+                .map_or(r.status.as_str().to_string(), |o| g(o, 10)),
+            r.gap.map_or("—".into(), |x| g(x, 3)),
+            r.iterations,
+            r.solve_time_us
+        );
+    }
+}
+
+type DrawResult<T> = std::result::Result<T, Box<dyn std::error::Error>>;
+
+/// Three panels over N (log scale): σ(N) with σ* as its asymptote; the relative gap
+/// (log scale); iterations (left axis) and median solve time (right axis).
+fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
+    let root = SVGBackend::new(path, (900, 1050)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let root = root.titled(&format!("Linearisation sweep: {title}"), ("sans-serif", 22))?;
+    let panels = root.split_evenly((3, 1));
+    let nmin = s.rows.iter().map(|r| r.sides).min().unwrap_or(3) as f64;
+    let nmax = (s.rows.iter().map(|r| r.sides).max().unwrap_or(4) as f64).max(nmin + 1.0);
+    let mut ks: Vec<usize> = s.rows.iter().map(|r| r.latitudes).collect();
+    ks.dedup();
+    ks.sort_unstable();
+    ks.dedup();
+    let colour = |i: usize| Palette99::pick(i).to_rgba();
+    let series =
+        |k: usize, f: &dyn Fn(&grasp_torque::sweep::SweepRow) -> Option<f64>| -> Vec<(f64, f64)> {
+            s.rows
+                .iter()
+                .filter(|r| r.latitudes == k)
+                .filter_map(|r| f(r).map(|v| (r.sides as f64, v)))
+                .collect()
+        };
+
+    // Panel 1: σ(N) and σ*.
+    let objs: Vec<f64> = s
+        .rows
+        .iter()
+        .filter_map(|r| r.objective)
+        .chain(s.exact_objective)
+        .collect();
+    let (lo, hi) = objs
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let pad = ((hi - lo) * 0.08).max(hi.abs() * 1e-3).max(1e-12);
+    let mut c = ChartBuilder::on(&panels[0])
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(80)
+        .caption(
+            "σ(N) = Σ τ² with N-sided inscribed cones; dashed: exact-cone optimum σ*",
+            ("sans-serif", 16),
+        )
+        .build_cartesian_2d((nmin..nmax).log_scale(), (lo - pad)..(hi + pad))?;
+    c.configure_mesh().x_desc("N (sides)").y_desc("σ").draw()?;
+    for (i, &k) in ks.iter().enumerate() {
+        let pts = series(k, &|r| r.objective);
+        c.draw_series(LineSeries::new(pts.clone(), colour(i).stroke_width(2)))?
+            .label(format!("σ(N), K = {k}"))
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], colour(i).stroke_width(2))
+            });
+        c.draw_series(
+            pts.into_iter()
+                .map(|p| Circle::new(p, 3, colour(i).filled())),
+        )?;
+    }
+    if let Some(e) = s.exact_objective {
+        c.draw_series(DashedLineSeries::new(
+            vec![(nmin, e), (nmax, e)],
+            8,
+            5,
+            BLACK.stroke_width(2),
+        ))?
+        .label(format!("σ* = {}", g(e, 8)))
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
+    }
+    c.configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()?;
+
+    // Panel 2: relative gap, log scale.
+    let gaps: Vec<f64> = s
+        .rows
+        .iter()
+        .filter_map(|r| r.gap)
+        .filter(|&g| g > 0.0)
+        .collect();
+    if !gaps.is_empty() {
+        let (glo, ghi) = gaps
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        let mut c = ChartBuilder::on(&panels[1])
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(80)
+            .caption(
+                "relative gap (σ(N) − σ*)/σ*  (zero gaps not drawn on the log scale)",
+                ("sans-serif", 16),
+            )
+            .build_cartesian_2d(
+                (nmin..nmax).log_scale(),
+                ((glo / 2.0)..(ghi * 2.0)).log_scale(),
+            )?;
+        c.configure_mesh()
+            .x_desc("N (sides)")
+            .y_desc("gap")
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .draw()?;
+        for (i, &k) in ks.iter().enumerate() {
+            let pts: Vec<(f64, f64)> = series(k, &|r| r.gap)
+                .into_iter()
+                .filter(|p| p.1 > 0.0)
+                .collect();
+            c.draw_series(LineSeries::new(pts.clone(), colour(i).stroke_width(2)))?
+                .label(format!("K = {k}"))
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], colour(i).stroke_width(2))
+                });
+            c.draw_series(
+                pts.into_iter()
+                    .map(|p| Circle::new(p, 3, colour(i).filled())),
+            )?;
+        }
+        c.configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()?;
+    }
+
+    // Panel 3: iterations and time.
+    let imax = s
+        .rows
+        .iter()
+        .map(|r| r.iterations)
+        .max()
+        .unwrap_or(1)
+        .max(1) as f64;
+    let tmax = s
+        .rows
+        .iter()
+        .map(|r| r.solve_time_us)
+        .fold(0.0, f64::max)
+        .max(1e-3);
+    let mut c = ChartBuilder::on(&panels[2])
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(80)
+        .right_y_label_area_size(80)
+        .caption(
+            format!(
+                "iterations (solid, left) and median solve time over {} solves (dashed, right)",
+                s.repeats
+            ),
+            ("sans-serif", 16),
+        )
+        .build_cartesian_2d((nmin..nmax).log_scale(), 0.0..imax * 1.1)?
+        .set_secondary_coord((nmin..nmax).log_scale(), 0.0..tmax * 1.1);
+    c.configure_mesh()
+        .x_desc("N (sides)")
+        .y_desc("iterations")
+        .draw()?;
+    c.configure_secondary_axes().y_desc("time (µs)").draw()?;
+    for (i, &k) in ks.iter().enumerate() {
+        c.draw_series(LineSeries::new(
+            series(k, &|r| Some(r.iterations as f64)),
+            colour(i).stroke_width(2),
+        ))?
+        .label(format!("iterations, K = {k}"))
+        .legend(move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 20, y)], colour(i).stroke_width(2))
+        });
+        c.draw_secondary_series(DashedLineSeries::new(
+            series(k, &|r| Some(r.solve_time_us)),
+            6,
+            4,
+            colour(i).stroke_width(2),
+        ))?
+        .label(format!("time µs, K = {k}"))
+        .legend(move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 20, y)], colour(i).stroke_width(1))
+        });
+    }
+    c.configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}

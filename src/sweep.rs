@@ -1,0 +1,176 @@
+//! The linearisation sweep (the paper's Figure 9, made quantitative): σ(N) against the
+//! exact-cone optimum σ*, with rows, iterations and solve time per N (and per K for
+//! SFCe contacts).
+
+use crate::{
+    solve_into, Backend, Cones, Error, GraspProblem, Solution, SolverConfig, Status, TorqueQp,
+    WarmStart,
+};
+use grasp_core::{ContactModel, SfceSpacing};
+
+/// What to sweep.
+#[derive(Clone, Debug)]
+pub struct SweepConfig {
+    /// Values of N.
+    pub sides: Vec<usize>,
+    /// Values of K; used only when the problem has SFCe contacts.
+    pub latitudes: Vec<usize>,
+    /// SFCe latitude placement; `None` keeps the problem's.
+    pub spacing: Option<SfceSpacing>,
+    /// The backend for the linearised problems. Default: active-set.
+    pub backend: Backend,
+    /// Timed solves per row; the median is reported. Default 21.
+    pub repeats: usize,
+}
+
+impl Default for SweepConfig {
+    fn default() -> Self {
+        Self {
+            sides: vec![4, 8, 16, 32, 64],
+            latitudes: vec![2],
+            spacing: None,
+            backend: Backend::ActiveSet,
+            repeats: 21,
+        }
+    }
+}
+
+/// One linearisation's result.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepRow {
+    /// N.
+    pub sides: usize,
+    /// K.
+    pub latitudes: usize,
+    /// Solve status.
+    pub status: Status,
+    /// σ(N), when optimal.
+    pub objective: Option<f64>,
+    /// `(σ(N) − σ*)/σ*`, when both are known.
+    pub gap: Option<f64>,
+    /// Inequality rows of H.
+    pub constraint_rows: usize,
+    /// Backend iterations.
+    pub iterations: usize,
+    /// Median solve time, µs.
+    pub solve_time_us: f64,
+}
+
+/// A whole sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sweep {
+    /// σ* from Clarabel on the exact cones (None when Clarabel is not compiled in or the
+    /// exact problem is not optimal).
+    pub exact_objective: Option<f64>,
+    /// Median time of the exact solve, µs.
+    pub exact_time_us: Option<f64>,
+    /// One row per (N, K).
+    pub rows: Vec<SweepRow>,
+    /// Timed solves per row.
+    pub repeats: usize,
+}
+
+fn timed(
+    config: &SolverConfig,
+    qp: TorqueQp,
+    w: &[f64; 6],
+    repeats: usize,
+) -> Result<(Solution, f64), Error> {
+    let mut solver = config.build(qp)?;
+    let mut s = Solution::default();
+    let mut times = Vec::with_capacity(repeats);
+    for _ in 0..repeats.max(1) {
+        solve_into(solver.as_mut(), w, &WarmStart::default(), &mut s)?;
+        times.push(s.solve_time.as_secs_f64() * 1e6);
+    }
+    times.sort_by(f64::total_cmp);
+    Ok((s, times[times.len() / 2]))
+}
+
+/// Runs the sweep; `progress(done, total)` is called after each row.
+pub fn sweep(
+    p: &GraspProblem,
+    config: &SweepConfig,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Sweep, Error> {
+    let mut p = p.clone();
+    if let Some(s) = config.spacing {
+        p.linearization.sfce_spacing = s;
+    }
+    let has_sfce = p
+        .contacts
+        .iter()
+        .any(|c| matches!(c, ContactModel::SfcElliptic { .. }));
+    let latitudes = if has_sfce {
+        config.latitudes.clone()
+    } else {
+        vec![p.linearization.latitudes]
+    };
+    let (exact_objective, exact_time_us) = if Backend::Clarabel.is_compiled() {
+        let c = SolverConfig {
+            backend: Some(Backend::Clarabel),
+            cones: Cones::Exact,
+            ..Default::default()
+        };
+        let (s, t) = timed(
+            &c,
+            TorqueQp::new(&p, &c.model)?,
+            &p.wrench,
+            config.repeats.min(5),
+        )?;
+        (s.is_optimal().then_some(s.objective), Some(t))
+    } else {
+        (None, None)
+    };
+    let lin = SolverConfig {
+        backend: Some(config.backend),
+        ..Default::default()
+    };
+    let total = config.sides.len() * latitudes.len();
+    let mut rows = Vec::with_capacity(total);
+    for &k in &latitudes {
+        for &n in &config.sides {
+            p.linearization.sides = n;
+            p.linearization.latitudes = k;
+            p.linearization.validate().map_err(|e| {
+                Error::Problem(grasp_core::ProblemError::Invalid {
+                    field: "sweep".into(),
+                    expected: "valid N and K".into(),
+                    found: e.to_string(),
+                })
+            })?;
+            let qp = TorqueQp::new(&p, &lin.model)?;
+            let constraint_rows = qp.inequality_rows();
+            let (s, t) = timed(&lin, qp, &p.wrench, config.repeats)?;
+            let objective = s.is_optimal().then_some(s.objective);
+            let gap = match (objective, exact_objective) {
+                (Some(o), Some(e)) if e > 0.0 => Some((o - e) / e),
+                _ => None,
+            };
+            rows.push(SweepRow {
+                sides: n,
+                latitudes: k,
+                status: s.status,
+                objective,
+                gap,
+                constraint_rows,
+                iterations: s.iterations,
+                solve_time_us: t,
+            });
+            progress(rows.len(), total);
+        }
+    }
+    Ok(Sweep {
+        exact_objective,
+        exact_time_us,
+        rows,
+        repeats: config.repeats,
+    })
+}
+
+/// The smallest N (over the rows of one K) whose gap is at most `tolerance`.
+pub fn smallest_sides_within(rows: &[SweepRow], tolerance: f64) -> Option<&SweepRow> {
+    rows.iter()
+        .filter(|r| r.gap.is_some_and(|g| g <= tolerance))
+        .min_by_key(|r| r.sides)
+}
