@@ -288,9 +288,10 @@ impl ActiveSetSolver {
 /// What the iteration ended with.
 enum End {
     Optimal,
+    /// Out of iterations; whether the last iterate satisfies every row.
+    IterationLimit(bool),
     /// With the row the dual phase could not satisfy, or `None` after the elastic phase.
     Infeasible(Option<usize>),
-    IterationLimit,
     Numerical(&'static str),
 }
 
@@ -344,9 +345,9 @@ impl TorqueSolver for ActiveSetSolver {
                 self.write_solution(out);
                 out.status = Status::Optimal;
             }
-            End::IterationLimit => {
-                // Iterates are feasible once s = 0: hand the last one back.
-                if self.ws.factor.contains(S_ROW) {
+            End::IterationLimit(feasible) => {
+                // Hand the last iterate back only when it satisfies every row.
+                if feasible {
                     self.write_solution(out);
                 } else {
                     out.active_set = None;
@@ -448,6 +449,7 @@ impl<'s> Iter<'s> {
     }
 
     /// `a_i · v` in (y, s) space, for a row index or [`S_ROW`].
+    #[inline]
     fn row_dot(&self, i: usize, v: &[f64]) -> f64 {
         let k = self.k();
         if i == S_ROW {
@@ -494,9 +496,22 @@ impl<'s> Iter<'s> {
 
     /// Exact residuals `a_i z − b_i` of every row.
     fn refresh_residuals(&mut self) {
-        for i in 0..self.s.ws.b.len() {
-            let r = self.row_dot(i, &self.s.ws.z) - self.s.ws.b[i];
-            self.s.ws.resid[i] = r;
+        let k = self.k();
+        let ws = &mut self.s.ws;
+        let (y, s) = (&ws.z[..k], ws.z[k]);
+        if k == 0 {
+            for (i, r) in ws.resid.iter_mut().enumerate() {
+                *r = ws.e[i] * s - ws.b[i];
+            }
+            return;
+        }
+        for (i, (r, row)) in ws
+            .resid
+            .iter_mut()
+            .zip(self.s.a.as_slice().chunks_exact(k))
+            .enumerate()
+        {
+            *r = dot(row, y) + ws.e[i] * s - ws.b[i];
         }
     }
 
@@ -526,10 +541,13 @@ impl<'s> Iter<'s> {
                     .sum();
             }
         } else if self.s.settings.phase1 == Phase1::Dual {
+            // Ends with the key set, s pinned at 0 and fresh residuals: feasible unless
+            // it proved infeasibility or ran out of iterations (the main loop then stops
+            // at once and checks the point).
             if let Err(row) = self.dual_phase() {
                 self.infeasible = Some(row);
-                return;
             }
+            return;
         }
         // Elastic variable for the rows y0 violates.
         self.refresh_residuals();
@@ -688,7 +706,7 @@ impl<'s> Iter<'s> {
         let mut degenerate = 0usize;
         loop {
             if self.iterations >= max_it {
-                return End::IterationLimit;
+                return self.out_of_iterations();
             }
             self.iterations += 1;
             // Step 2: the equality-constrained minimiser (eq. 44) and d = τ' − τ.
@@ -806,6 +824,15 @@ impl<'s> Iter<'s> {
                 }
             }
         }
+    }
+
+    /// The iteration cap: report whether the current iterate is admissible (s pinned at
+    /// 0 and every row holding), so that only a feasible point is ever handed back.
+    fn out_of_iterations(&mut self) -> End {
+        self.refresh_residuals();
+        let tol = self.feas_tol();
+        let ws = &self.s.ws;
+        End::IterationLimit(ws.factor.contains(S_ROW) && ws.resid.iter().all(|&r| r >= -tol))
     }
 
     /// Re-solves the final key set without the penalty (exact multipliers) and checks

@@ -254,3 +254,27 @@ fn minimum_normal_force_and_weights_are_honoured() {
         .sum();
     assert!((s.objective - expect).abs() < 1e-12);
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 100, ..ProptestConfig::default() })]
+
+    /// An iteration cap is a status, never a panic, and any torque handed back with it
+    /// satisfies every row.
+    #[test]
+    fn iteration_limit_returns_only_feasible_points(seed in any::<u64>(), cap in 1usize..6, elastic in any::<bool>()) {
+        let p = problem(seed, 8);
+        let qp = TorqueQp::new(&p, &ModelOptions::default()).unwrap();
+        let settings = ActiveSetSettings {
+            max_iterations: cap,
+            phase1: if elastic { Phase1::Elastic } else { Phase1::Dual },
+            ..Default::default()
+        };
+        let mut solver = ActiveSetSolver::new(qp, settings).unwrap();
+        let s = solve(&mut solver, &p.wrench, &WarmStart::default()).unwrap();
+        prop_assert!(s.iterations <= cap);
+        if !s.torque.is_empty() {
+            let scale = norm_inf(&p.wrench).max(norm_inf(&s.contact_forces)).max(1e-12);
+            prop_assert!(s.diagnostics.max_violation <= 1e-8 * scale, "{:?}: violation {}", s.status, s.diagnostics.max_violation);
+        }
+    }
+}
