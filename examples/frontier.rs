@@ -10,6 +10,8 @@ use grasp_torque::{
     WarmStart,
 };
 
+// Shared with the benches; this example uses only `hand`.
+#[allow(dead_code)]
 #[path = "../benches/common/fixtures.rs"]
 mod fixtures;
 
