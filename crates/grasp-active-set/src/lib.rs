@@ -48,8 +48,9 @@ pub enum Phase1 {
 /// (`max(‖ĉ‖∞, ‖y‖∞)`, in units of the weighted torque).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ActiveSetSettings {
-    /// Cold-start phase 1. Default [`Phase1::Dual`]. Warm starts always use the primal
-    /// iteration from the given torque or key set.
+    /// Cold-start phase 1. Default [`Phase1::Dual`], which also hot-starts from a warm
+    /// key set whose point the new wrench made infeasible; with [`Phase1::Elastic`] that
+    /// case takes the elastic start. A feasible warm start goes straight to Steps 2–4.
     pub phase1: Phase1,
     /// Iteration cap (each iteration is one subproblem solve or one phase-1 step).
     /// Default 10 000.
@@ -532,6 +533,19 @@ impl<'s> Iter<'s> {
             let (z, zs) = (&mut self.s.ws.z, &self.s.ws.zstar);
             z.copy_from_slice(zs);
             z[k] = 0.0;
+            if self.s.settings.phase1 == Phase1::Dual {
+                // Feasible: the primal Steps 2–4 confirm or improve it. Infeasible (the
+                // wrench moved): hot-start the dual phase from this key set instead of
+                // an elastic detour.
+                self.refresh_residuals();
+                let tol = self.feas_tol();
+                if self.s.ws.resid.iter().any(|&r| r < -tol) {
+                    if let Err(row) = self.dual_from_key_set() {
+                        self.infeasible = Some(row);
+                    }
+                    return;
+                }
+            }
         } else if let Some(t) = warm.torque {
             // y0 = Nᵀ(D τ − u0).
             let s = &mut *self.s;
@@ -596,11 +610,51 @@ impl<'s> Iter<'s> {
     /// confirm it. Fails with the violated row when it is a non-negative combination of
     /// the key set's rows (no torque exists); each add or drop counts as an iteration.
     fn dual_phase(&mut self) -> Result<(), usize> {
-        let k = self.k();
-        let n = k + 1;
         self.add(S_ROW);
         self.s.ws.mult.clear();
         self.s.ws.mult.push(0.0);
+        self.dual_iterate()
+    }
+
+    /// The dual phase hot-started from the current key set (s pinned at 0), for a warm
+    /// key set whose point the new wrench made infeasible: rows with negative
+    /// multipliers leave until the set is dual feasible, then the dual iteration goes on.
+    fn dual_from_key_set(&mut self) -> Result<(), usize> {
+        let k = self.k();
+        loop {
+            self.subproblem(0.0);
+            let ws = &self.s.ws;
+            let tol = self.s.settings.multiplier_tolerance * norm_inf(&ws.zstar).max(self.scale);
+            let worst = ws
+                .factor
+                .rows()
+                .iter()
+                .enumerate()
+                .filter(|&(pos, &r)| r != S_ROW && ws.factor.lambda(pos) < -tol)
+                .min_by(|a, b| ws.factor.lambda(a.0).total_cmp(&ws.factor.lambda(b.0)));
+            match worst {
+                Some((pos, _)) => {
+                    self.iterations += 1;
+                    self.remove(pos);
+                }
+                None => break,
+            }
+        }
+        let ws = &mut self.s.ws;
+        ws.z.copy_from_slice(&ws.zstar);
+        ws.z[k] = 0.0;
+        ws.mult.clear();
+        for pos in 0..ws.factor.rows().len() {
+            ws.mult.push(ws.factor.lambda(pos));
+        }
+        self.dual_iterate()
+    }
+
+    /// The dual iteration proper (see [`Self::dual_phase`]), from a key set whose
+    /// multipliers `mult` are non-negative and whose minimiser is `z`.
+    fn dual_iterate(&mut self) -> Result<(), usize> {
+        let k = self.k();
+        let n = k + 1;
         let max_it = self.s.settings.max_iterations;
         loop {
             self.refresh_residuals();

@@ -1,7 +1,10 @@
 //! Decompositions on [`Matrix`], through `faer`.
 //!
-//! faer was chosen over nalgebra for the SVD; `docs/benchmarks.md` records the comparison
-//! at grasp sizes (`cargo bench --bench decomposition`).
+//! faer was chosen over nalgebra for the SVD. nalgebra's is about 2× faster at grasp
+//! sizes, but on some grasp matrices its factors reconstruct A only to ~1e-9, which
+//! shows up as `‖G f − w‖∞ ≈ 1e-8` instead of rounding level. faer's full SVD is
+//! accurate to rounding and directly gives the complement of range(A) that the
+//! consistency equalities need (`cargo bench --bench decomposition`, docs/benchmarks.md).
 
 use crate::matrix::Matrix;
 
