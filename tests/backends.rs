@@ -125,6 +125,12 @@ proptest! {
             let polished = !b.warnings.iter().any(|w| w.contains("polishing did not succeed"));
             let tol = grasp_torque::OsqpSettings::stated_tolerance(polished);
             prop_assert!(rel(a.objective, b.objective) <= tol, "{} vs {} (polished {})", a.objective, b.objective, polished);
+            // ADMM meets the equalities to its eps (1e-7), not to rounding.
+            let d = &b.diagnostics;
+            let scale = norm_inf(&p.wrench).max(norm_inf(&b.contact_forces)).max(1e-12);
+            prop_assert!(d.wrench_residual <= 1e-5 * scale, "‖Gf − w‖∞ = {}", d.wrench_residual);
+            prop_assert!(d.consistency_residual <= 1e-5 * scale, "‖Cτ − e‖∞ = {}", d.consistency_residual);
+            prop_assert!(d.max_violation <= 1e-5 * scale, "linearised violation {}", d.max_violation);
         }
     }
 }

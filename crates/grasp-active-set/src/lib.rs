@@ -426,6 +426,9 @@ struct Iter<'s> {
     iterations: usize,
     /// Set by a dual phase 1 that proved no torque exists: the row it could not satisfy.
     infeasible: Option<usize>,
+    /// Set when Step 1 ended at a feasible point whose exact multipliers are all
+    /// non-negative: it is optimal, and Steps 2–4 are skipped.
+    certified: bool,
     penalty: f64,
     scale: f64,
     bland: bool,
@@ -439,6 +442,7 @@ impl<'s> Iter<'s> {
             s,
             iterations: 0,
             infeasible: None,
+            certified: false,
             penalty,
             scale,
             bland: false,
@@ -540,11 +544,16 @@ impl<'s> Iter<'s> {
                 self.refresh_residuals();
                 let tol = self.feas_tol();
                 if self.s.ws.resid.iter().any(|&r| r < -tol) {
-                    if let Err(row) = self.dual_from_key_set() {
-                        self.infeasible = Some(row);
+                    match self.dual_from_key_set() {
+                        Err(row) => self.infeasible = Some(row),
+                        Ok(true) => self.certify(),
+                        Ok(false) => {}
                     }
                     return;
                 }
+                // Feasible, and the multipliers from that solve are at hand.
+                self.certified = self.multipliers_nonnegative();
+                return;
             }
         } else if let Some(t) = warm.torque {
             // y0 = Nᵀ(D τ − u0).
@@ -558,8 +567,10 @@ impl<'s> Iter<'s> {
             // Ends with the key set, s pinned at 0 and fresh residuals: feasible unless
             // it proved infeasibility or ran out of iterations (the main loop then stops
             // at once and checks the point).
-            if let Err(row) = self.dual_phase() {
-                self.infeasible = Some(row);
+            match self.dual_phase() {
+                Err(row) => self.infeasible = Some(row),
+                Ok(true) => self.certify(),
+                Ok(false) => {}
             }
             return;
         }
@@ -609,7 +620,7 @@ impl<'s> Iter<'s> {
     /// its key set, so the first primal-feasible one is optimal overall; Steps 2–4 then
     /// confirm it. Fails with the violated row when it is a non-negative combination of
     /// the key set's rows (no torque exists); each add or drop counts as an iteration.
-    fn dual_phase(&mut self) -> Result<(), usize> {
+    fn dual_phase(&mut self) -> Result<bool, usize> {
         self.add(S_ROW);
         self.s.ws.mult.clear();
         self.s.ws.mult.push(0.0);
@@ -619,7 +630,7 @@ impl<'s> Iter<'s> {
     /// The dual phase hot-started from the current key set (s pinned at 0), for a warm
     /// key set whose point the new wrench made infeasible: rows with negative
     /// multipliers leave until the set is dual feasible, then the dual iteration goes on.
-    fn dual_from_key_set(&mut self) -> Result<(), usize> {
+    fn dual_from_key_set(&mut self) -> Result<bool, usize> {
         let k = self.k();
         loop {
             self.subproblem(0.0);
@@ -651,8 +662,9 @@ impl<'s> Iter<'s> {
     }
 
     /// The dual iteration proper (see [`Self::dual_phase`]), from a key set whose
-    /// multipliers `mult` are non-negative and whose minimiser is `z`.
-    fn dual_iterate(&mut self) -> Result<(), usize> {
+    /// multipliers `mult` are non-negative and whose minimiser is `z`. `Ok(true)` when
+    /// it reached a feasible (hence optimal) point, `Ok(false)` at the iteration cap.
+    fn dual_iterate(&mut self) -> Result<bool, usize> {
         let k = self.k();
         let n = k + 1;
         let max_it = self.s.settings.max_iterations;
@@ -667,12 +679,12 @@ impl<'s> Iter<'s> {
             }
             let p = worst.1;
             if p == usize::MAX {
-                return Ok(());
+                return Ok(true);
             }
             let mut lam_p = 0.0;
             loop {
                 if self.iterations >= max_it {
-                    return Ok(());
+                    return Ok(false);
                 }
                 self.iterations += 1;
                 let ws = &mut self.s.ws;
@@ -751,6 +763,9 @@ impl<'s> Iter<'s> {
         self.start(warm);
         if let Some(row) = self.infeasible {
             return End::Infeasible(Some(row));
+        }
+        if self.certified {
+            return End::Optimal;
         }
         let k = self.k();
         let kp = k + 1;
@@ -878,6 +893,30 @@ impl<'s> Iter<'s> {
                 }
             }
         }
+    }
+
+    /// After a successful dual phase: the minimiser and exact multipliers of the final
+    /// key set (the dual phase's residuals are fresh), and whether they certify
+    /// optimality, so that Steps 2–4 have nothing left to do.
+    fn certify(&mut self) {
+        let k = self.k();
+        self.subproblem(0.0);
+        let ws = &mut self.s.ws;
+        ws.z.copy_from_slice(&ws.zstar);
+        ws.z[k] = 0.0;
+        self.certified = self.multipliers_nonnegative();
+    }
+
+    /// Whether the last subproblem's multipliers (s ≥ 0 aside) are non-negative, with
+    /// the tolerance of the final check.
+    fn multipliers_nonnegative(&self) -> bool {
+        let ws = &self.s.ws;
+        let ltol = self.s.settings.multiplier_tolerance * norm_inf(&ws.z).max(self.scale) * 10.0;
+        ws.factor
+            .rows()
+            .iter()
+            .enumerate()
+            .all(|(pos, &r)| r == S_ROW || ws.factor.lambda(pos) >= -ltol)
     }
 
     /// The iteration cap: report whether the current iterate is admissible (s pinned at

@@ -91,3 +91,28 @@ fn paper_model_reproduces_the_published_optimum() {
     );
     assert!(!sol.warnings.is_empty());
 }
+
+/// Issue: geometry-form and matrix-form problems give the same objectives (1e-6
+/// relative, N = 4, 8, 16) on every reference case that carries its geometry.
+#[test]
+fn geometry_form_gives_the_reference_objectives() {
+    let mut checked = 0;
+    for case in cases().iter().filter(|c| c.get("geometry").is_some()) {
+        let name = case["name"].as_str().unwrap();
+        let geo: grasp_core::geometry::GeometryFile =
+            serde_json::from_value(case["geometry"].clone()).unwrap();
+        let mut p = geo.into_problem().unwrap();
+        for (variant, sides) in [("N4", 4), ("N8", 8), ("N16", 16)] {
+            p.linearization.sides = sides;
+            let qp = TorqueQp::new(&p, &ModelOptions::default()).unwrap();
+            let mut s = ActiveSetSolver::new(qp, ActiveSetSettings::default()).unwrap();
+            let sol = solve(&mut s, &p.wrench, &WarmStart::default()).unwrap();
+            let want = case["reference"][variant]["objective"].as_f64().unwrap();
+            assert_eq!(sol.status, Status::Optimal, "{name} {variant}");
+            let rel = (sol.objective - want).abs() / want;
+            assert!(rel < 1e-6, "{name} {variant}: {} vs {want}", sol.objective);
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 40 * 3);
+}
