@@ -93,9 +93,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             (10.0..xmax * 1.2).log_scale(),
             (0.5..ymax * 1.5).log_scale(),
         )?;
+    // Log axes get a label at every minor tick: keep decades and their 2× and 5×.
+    let sparse = |v: &f64| {
+        let lead = v / 10f64.powf(v.log10().floor());
+        if [1.0, 2.0, 5.0].iter().any(|d| (lead - d).abs() < 1e-6) {
+            format!("{v:.0}")
+        } else {
+            String::new()
+        }
+    };
     c.configure_mesh()
         .x_desc("inequality rows (N × contacts, SFCe: 2NK+1 per contact)")
         .y_desc("µs")
+        .x_label_formatter(&sparse)
+        .y_label_formatter(&sparse)
+        .light_line_style(RGBColor(242, 242, 242))
         .draw()?;
     for (i, (label, pts)) in scaling.iter().enumerate() {
         let col = Palette99::pick(i).to_rgba();

@@ -235,7 +235,11 @@ fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
             ("sans-serif", 16),
         )
         .build_cartesian_2d((nmin..nmax).log_scale(), (lo - pad)..(hi + pad))?;
-    c.configure_mesh().x_desc("N (sides)").y_desc("σ").draw()?;
+    c.configure_mesh()
+        .x_desc("N (sides)")
+        .y_desc("σ")
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .draw()?;
     for (i, &k) in ks.iter().enumerate() {
         let pts = series(k, &|r| r.objective);
         c.draw_series(LineSeries::new(pts.clone(), colour(i).stroke_width(2)))?
