@@ -145,9 +145,12 @@ fn reference_cases() -> Vec<serde_json::Value> {
     v["cases"].as_array().unwrap().clone()
 }
 
+/// The reference is precise to about 2e-9 relative (its README); the native solver and
+/// Clarabel's defaults land within that (measured: at most 2.0e-9), so 1e-8 is asserted,
+/// tighter than the 1e-6 the issue asks for. OSQP: its stated ADMM tolerance.
 #[test]
 fn reference_objectives_are_reproduced_by_every_backend() {
-    let mut backends = vec![(Backend::ActiveSet, 1e-6), (Backend::Clarabel, 1e-6)];
+    let mut backends = vec![(Backend::ActiveSet, 1e-8), (Backend::Clarabel, 1e-8)];
     if Backend::Osqp.is_compiled() {
         backends.push((Backend::Osqp, 1e-3));
     }
