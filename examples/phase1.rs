@@ -5,10 +5,15 @@
 //! Run: `cargo run --release --example phase1`
 
 use grasp_torque::file::MatrixFile;
-use grasp_torque::{solve, ActiveSetSettings, ActiveSetSolver, ModelOptions, Phase1, TorqueQp, WarmStart};
+use grasp_torque::{
+    solve, ActiveSetSettings, ActiveSetSolver, ModelOptions, Phase1, TorqueQp, WarmStart,
+};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/reference-cases.json");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/reference-cases.json"
+    );
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path)?)?;
     for phase1 in [Phase1::Dual, Phase1::Elastic] {
         let (mut iterations, mut solves, mut worst) = (0, 0, 0);
@@ -18,7 +23,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             for n in [4, 8, 16] {
                 p.linearization.sides = n;
                 let qp = TorqueQp::new(&p, &ModelOptions::default())?;
-                let mut s = ActiveSetSolver::new(qp, ActiveSetSettings { phase1, ..Default::default() })?;
+                let mut s = ActiveSetSolver::new(
+                    qp,
+                    ActiveSetSettings {
+                        phase1,
+                        ..Default::default()
+                    },
+                )?;
                 let sol = solve(&mut s, &p.wrench, &WarmStart::default())?;
                 iterations += sol.iterations;
                 worst = worst.max(sol.iterations);

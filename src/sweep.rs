@@ -132,13 +132,7 @@ pub fn sweep(
         for &n in &config.sides {
             p.linearization.sides = n;
             p.linearization.latitudes = k;
-            p.linearization.validate().map_err(|e| {
-                Error::Problem(grasp_core::ProblemError::Invalid {
-                    field: "sweep".into(),
-                    expected: "valid N and K".into(),
-                    found: e.to_string(),
-                })
-            })?;
+            p.validate()?;
             let qp = TorqueQp::new(&p, &lin.model)?;
             let constraint_rows = qp.inequality_rows();
             let (s, t) = timed(&lin, qp, &p.wrench, config.repeats)?;

@@ -382,3 +382,19 @@ fn bad_flags_are_usage_errors() {
     let out = run(&["solve"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn oversized_linearisations_and_zero_wrenches() {
+    let p = fixture("hand4-sfce.json");
+    assert_rejected(
+        &run(&["solve", &p, "--sides", "4096", "--latitudes", "256"]),
+        "at most 1048576 cone rows",
+    );
+    let mut v = paper();
+    v["wrench"] = serde_json::json!([0, 0, 0, 0, 0, 0]);
+    let f = temp_file("zero.json", &v.to_string());
+    let out = run(&["solve", f.to_str().unwrap(), "--format", "json"]);
+    assert_eq!(out.status.code(), Some(0));
+    let s: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(s["objective"].as_f64().unwrap(), 0.0);
+}

@@ -5,6 +5,10 @@ use crate::contact::ContactModel;
 use crate::error::ProblemError;
 use crate::matrix::Matrix;
 
+/// Most inequality rows a problem may have: H is dense, so this bounds its memory
+/// (about 8 bytes × rows × joints, plus S: rows × force components).
+pub const MAX_ROWS: usize = 1 << 20;
+
 /// Everything that defines one grasp-torque problem.
 ///
 /// `G f = w` must hold for the contact forces `f` (n components, contacts in column
@@ -145,6 +149,21 @@ impl GraspProblem {
         self.linearization
             .validate()
             .map_err(|e| ProblemError::invalid("linearization", "valid N and K", e))?;
+        let rows: usize = self
+            .contacts
+            .iter()
+            .map(|c| self.linearization.rows_for(c))
+            .sum();
+        if rows > MAX_ROWS {
+            return Err(ProblemError::invalid(
+                "linearization",
+                format!("at most {MAX_ROWS} cone rows in all (fewer sides or latitudes)"),
+                format!(
+                    "{rows} rows for N = {}, K = {}",
+                    self.linearization.sides, self.linearization.latitudes
+                ),
+            ));
+        }
         let m = jt.nrows();
         if let Some(w) = &self.torque_weights {
             per_joint("torque_weights", w.len(), m)?;
