@@ -61,18 +61,27 @@ fn physically_consistent(
             d.max_violation
         ),
         Cones::Exact => {
-            prop_assert!(
-                d.friction_margins.iter().all(|&m| m >= -1e-6),
-                "{:?}",
-                d.friction_margins
-            )
+            // Absolute cone violation `g(f) − fz` in force units: the scale-free margin
+            // turns a near-zero force that is off by the solver's tolerance into −1.
+            let mut offset = 0;
+            for c in &p.contacts {
+                let f = &s.contact_forces[offset..offset + c.dim()];
+                let violation = c.gauge(f) - f[c.normal_index()];
+                prop_assert!(violation <= tol, "contact {:?}: g − fz = {}", c, violation);
+                offset += c.dim();
+            }
         }
     }
     Ok(())
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig {
+        cases: 300,
+        // Fixed seed: CI and every developer see the same cases (STYLE.md).
+        rng_seed: proptest::test_runner::RngSeed::Fixed(41),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn native_and_clarabel_agree_on_the_linearised_problem(seed in any::<u64>(), sides in prop::sample::select(vec![4usize, 8, 16])) {
@@ -113,7 +122,12 @@ proptest! {
 
 #[cfg(feature = "osqp")]
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig {
+        cases: 200,
+        // Fixed seed: CI and every developer see the same cases (STYLE.md).
+        rng_seed: proptest::test_runner::RngSeed::Fixed(42),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn osqp_agrees_to_its_stated_tolerance(seed in any::<u64>()) {

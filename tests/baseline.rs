@@ -64,7 +64,12 @@ fn table1_fixtures_never_get_worse() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig {
+        cases: 200,
+        // Fixed seed: CI and every developer see the same cases (STYLE.md).
+        rng_seed: proptest::test_runner::RngSeed::Fixed(31),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn torque_space_optimum_is_never_above_the_admissible_baseline(seed in any::<u64>()) {

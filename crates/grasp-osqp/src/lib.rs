@@ -40,11 +40,12 @@ impl Default for OsqpSettings {
 }
 
 impl OsqpSettings {
-    /// Relative σ tolerance the answers are tested to: tight when polishing succeeded,
-    /// ADMM's first-order accuracy otherwise.
+    /// Relative σ tolerance the answers are tested to: 1e-5 when polishing succeeded
+    /// (polishing solves a KKT system regularised by OSQP's delta = 1e-6, so on badly
+    /// scaled grasps σ lands ~1e-6 off), ADMM's first-order accuracy (1e-3) otherwise.
     pub fn stated_tolerance(polished: bool) -> f64 {
         if polished {
-            1e-6
+            1e-5
         } else {
             1e-3
         }
