@@ -230,8 +230,12 @@ impl SolverConfig {
             Backend::Osqp => grasp_osqp::OsqpSolver::new(qp, self.osqp)
                 .map(|s| Box::new(s) as Box<dyn TorqueSolver>)
                 .map_err(|e| build_err(&e)),
+            // Not compiled in: already reported above; kept as an error, never a panic.
             #[allow(unreachable_patterns)]
-            _ => unreachable!("checked by is_compiled"),
+            _ => Err(BackendError::NotCompiled {
+                backend: backend.name(),
+                feature: backend.feature(),
+            }),
         }
     }
 }
