@@ -190,6 +190,27 @@ fn print_text(problem: &Path, s: &Sweep) {
 
 type DrawResult<T> = std::result::Result<T, Box<dyn std::error::Error>>;
 
+fn min_max(v: &[f64]) -> (f64, f64) {
+    v.iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        })
+}
+
+/// One series over log-scaled N: a line, its points, and a legend entry.
+fn line_with_points<'a, Y: Ranged<ValueType = f64>>(
+    c: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<LogCoord<f64>, Y>>,
+    pts: Vec<(f64, f64)>,
+    colour: RGBAColor,
+    label: String,
+) -> DrawResult<()> {
+    c.draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))?
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+    c.draw_series(pts.into_iter().map(|p| Circle::new(p, 3, colour.filled())))?;
+    Ok(())
+}
+
 /// Three panels over N (log scale): σ(N) with σ* as its asymptote; the relative gap
 /// (log scale); iterations (left axis) and median solve time (right axis).
 fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
@@ -220,11 +241,7 @@ fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
         .filter_map(|r| r.objective)
         .chain(s.exact_objective)
         .collect();
-    let (lo, hi) = objs
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
+    let (lo, hi) = min_max(&objs);
     let pad = ((hi - lo) * 0.08).max(hi.abs() * 1e-3).max(1e-12);
     let mut c = ChartBuilder::on(&panels[0])
         .margin(12)
@@ -241,15 +258,11 @@ fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
         .x_label_formatter(&|v| format!("{v:.0}"))
         .draw()?;
     for (i, &k) in ks.iter().enumerate() {
-        let pts = series(k, &|r| r.objective);
-        c.draw_series(LineSeries::new(pts.clone(), colour(i).stroke_width(2)))?
-            .label(format!("σ(N), K = {k}"))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], colour(i).stroke_width(2))
-            });
-        c.draw_series(
-            pts.into_iter()
-                .map(|p| Circle::new(p, 3, colour(i).filled())),
+        line_with_points(
+            &mut c,
+            series(k, &|r| r.objective),
+            colour(i),
+            format!("σ(N), K = {k}"),
         )?;
     }
     if let Some(e) = s.exact_objective {
@@ -275,11 +288,7 @@ fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
         .filter(|&g| g > 0.0)
         .collect();
     if !gaps.is_empty() {
-        let (glo, ghi) = gaps
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                (a.min(v), b.max(v))
-            });
+        let (glo, ghi) = min_max(&gaps);
         let mut c = ChartBuilder::on(&panels[1])
             .margin(12)
             .x_label_area_size(40)
@@ -295,22 +304,15 @@ fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
         c.configure_mesh()
             .x_desc("N (sides)")
             .y_desc("gap")
+            .x_label_formatter(&|v| format!("{v:.0}"))
             .y_label_formatter(&|v| format!("{v:.0e}"))
             .draw()?;
         for (i, &k) in ks.iter().enumerate() {
-            let pts: Vec<(f64, f64)> = series(k, &|r| r.gap)
+            let pts = series(k, &|r| r.gap)
                 .into_iter()
                 .filter(|p| p.1 > 0.0)
                 .collect();
-            c.draw_series(LineSeries::new(pts.clone(), colour(i).stroke_width(2)))?
-                .label(format!("K = {k}"))
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], colour(i).stroke_width(2))
-                });
-            c.draw_series(
-                pts.into_iter()
-                    .map(|p| Circle::new(p, 3, colour(i).filled())),
-            )?;
+            line_with_points(&mut c, pts, colour(i), format!("K = {k}"))?;
         }
         c.configure_series_labels()
             .background_style(WHITE.mix(0.85))
@@ -349,6 +351,7 @@ fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
     c.configure_mesh()
         .x_desc("N (sides)")
         .y_desc("iterations")
+        .x_label_formatter(&|v| format!("{v:.0}"))
         .draw()?;
     c.configure_secondary_axes().y_desc("time (µs)").draw()?;
     for (i, &k) in ks.iter().enumerate() {
