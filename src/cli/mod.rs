@@ -5,11 +5,15 @@ mod compare;
 mod format;
 mod solve;
 mod sweep;
+// The force-space baseline is solved by the native backend.
+#[cfg(feature = "active-set")]
 mod table;
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
-use grasp_torque::{Backend, Cones, Equilibrium, GraspProblem, SfceSpacing, SolverConfig};
+use grasp_torque::{
+    Backend, Cones, Equilibrium, GraspProblem, InternalForces, SfceSpacing, SolverConfig,
+};
 use std::path::PathBuf;
 
 /// Minimum-torque grasp forces for dexterous hands (Jia et al.'s key-constraint-set
@@ -29,6 +33,7 @@ enum Command {
     Build(build::BuildArgs),
     /// The paper's Table 1: torques before (contact-force optimum mapped through Jᵀ)
     /// and after (torque-space optimum), per object.
+    #[cfg(feature = "active-set")]
     Table(table::TableArgs),
     /// Every compiled backend on the linearised problem, plus Clarabel on the exact
     /// cones, with a verdict (exit 5 when they disagree).
@@ -50,12 +55,18 @@ pub(crate) enum Format {
 /// Options shared by the commands that build a model.
 #[derive(clap::Args, Debug, Clone)]
 pub(crate) struct ModelArgs {
-    /// Backend: active-set, clarabel or osqp (those compiled in).
-    #[arg(long, default_value = "active-set")]
-    backend: String,
-    /// Cones: linear (inscribed polyhedra) or exact (clarabel only).
+    /// Backend: active-set, clarabel or osqp (those compiled in). Default: the first
+    /// that supports the cones and internal forces asked for (active-set when it can).
+    #[arg(long)]
+    backend: Option<String>,
+    /// Cones: linear (inscribed polyhedra) or exact (second-order cones).
     #[arg(long, default_value = "linear")]
     cones: String,
+    /// How the passive internal forces are fixed (overrides the file): compliance
+    /// (unit-invariant least norm, the default), euclidean (the paper's A⁺) or free
+    /// (optimised).
+    #[arg(long, value_enum)]
+    internal_forces: Option<Internal>,
     /// N, sides of the inscribed polygons (overrides the file).
     #[arg(long)]
     sides: Option<usize>,
@@ -77,6 +88,13 @@ pub(crate) enum Spacing {
     Uniform,
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum Internal {
+    Compliance,
+    Euclidean,
+    Free,
+}
+
 impl ModelArgs {
     /// Applies the overrides to `p` and returns the solver configuration.
     pub(crate) fn configure(&self, p: &mut GraspProblem) -> Result<SolverConfig> {
@@ -95,22 +113,25 @@ impl ModelArgs {
         p.linearization
             .validate()
             .map_err(|e| anyhow::anyhow!("{}", e.to_string().replace("linearization.", "--")))?;
-        let backend: Backend = self
+        if let Some(i) = self.internal_forces {
+            p.internal_forces = match i {
+                Internal::Compliance => InternalForces::Compliance,
+                Internal::Euclidean => InternalForces::Euclidean,
+                Internal::Free => InternalForces::Free,
+            };
+        }
+        let backend: Option<Backend> = self
             .backend
-            .parse()
+            .as_deref()
+            .map(str::parse)
+            .transpose()
             .map_err(|e: String| anyhow::anyhow!("--backend: {e}"))?;
         let cones: Cones = self
             .cones
             .parse()
             .map_err(|e: String| anyhow::anyhow!("--cones: {e}"))?;
-        if !backend.supports(cones) {
-            bail!(
-                "--backend {backend} does not support --cones {cones}; supported pairs: {}",
-                Backend::supported_pairs()
-            );
-        }
         let mut config = SolverConfig {
-            backend: Some(backend),
+            backend,
             cones,
             ..Default::default()
         };
@@ -148,6 +169,7 @@ pub(crate) fn run() -> Result<u8> {
     match cli.command {
         Command::Solve(args) => solve::run(&args),
         Command::Build(args) => build::run(&args),
+        #[cfg(feature = "active-set")]
         Command::Table(args) => table::run(&args),
         Command::Compare(args) => compare::run(&args),
         Command::Sweep(args) => sweep::run(&args),

@@ -24,10 +24,12 @@ pub(crate) struct SolveArgs {
 
 /// Exit code of a finished solve.
 pub(crate) fn exit_code(s: Status) -> u8 {
-    match s {
-        Status::Optimal => 0,
-        Status::Infeasible => 3,
-        Status::IterationLimit | Status::NumericalFailure => 4,
+    if s.has_answer() {
+        0
+    } else if s == Status::Infeasible {
+        3
+    } else {
+        4
     }
 }
 
@@ -69,7 +71,8 @@ pub(crate) fn run(args: &SolveArgs) -> Result<u8> {
                 qp,
                 sol,
                 solver.backend_name(),
-                cones
+                cones,
+                &problem.wrench
             )
         ),
     }
@@ -84,59 +87,133 @@ fn per_contact(qp: &TorqueQp, f: &[f64]) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// Whether `‖G f − w‖∞` is within the check's tolerance of the terms that make it up.
+pub(crate) fn held(qp: &TorqueQp, s: &Solution, w: &[f64; 6]) -> (bool, f64) {
+    let g = &qp.model.grasp_matrix;
+    let scale = (0..6)
+        .map(|i| {
+            g.row(i)
+                .iter()
+                .zip(&s.contact_forces)
+                .map(|(a, b)| (a * b).abs())
+                .sum::<f64>()
+                + w[i].abs()
+        })
+        .fold(0.0, f64::max);
+    let tol = s.diagnostics.check_tolerance * scale;
+    (s.diagnostics.wrench_residual <= tol, tol)
+}
+
+/// The JSON report: the serialised [`Solution`], with the problem's context.
 pub(crate) fn to_json(
     qp: &TorqueQp,
     s: &Solution,
     backend: &str,
     cones: &str,
 ) -> serde_json::Value {
+    let model = &qp.model;
+    let mut v = serde_json::to_value(s).unwrap_or_else(|_| json!({}));
     let ok = !s.torque.is_empty();
-    let opt = |v: f64| if ok { json!(v) } else { json!(null) };
-    json!({
-        "status": s.status.as_str(),
-        "reason": s.reason.as_ref().map(|r| r.to_string()),
-        "objective": opt(s.objective),
-        "torque": if ok { json!(s.torque) } else { json!(null) },
-        "contact_forces": if ok { json!(per_contact(qp, &s.contact_forces)) } else { json!(null) },
-        "contact_models": qp.contacts.iter().map(|c| c.model.name()).collect::<Vec<_>>(),
-        "iterations": s.iterations,
-        "active_set": s.active_set,
-        "residuals": {
-            "wrench": opt(s.diagnostics.wrench_residual),
-            "torque": opt(s.diagnostics.torque_residual),
-            "consistency": opt(s.diagnostics.consistency_residual),
+    let o = v.as_object_mut().expect("a struct serialises to an object");
+    if !ok {
+        for key in ["torque", "contact_forces", "objective", "internal_forces"] {
+            o.insert(key.into(), json!(null));
+        }
+    } else {
+        o.insert(
+            "contact_forces".into(),
+            json!(per_contact(qp, &s.contact_forces)),
+        );
+    }
+    let d = &s.diagnostics;
+    o.insert(
+        "residuals".into(),
+        if ok {
+            json!({"wrench": d.wrench_residual, "torque": d.torque_residual, "consistency": d.consistency_residual})
+        } else {
+            json!(null)
         },
-        "max_violation": opt(s.diagnostics.max_violation),
-        "friction_margin": if ok { json!(s.diagnostics.friction_margins) } else { json!(null) },
-        "backend": backend,
-        "cones": cones,
-        "sides": qp.linearization.sides,
-        "latitudes": qp.linearization.latitudes,
-        "constraint_rows": qp.inequality_rows(),
-        "consistency": qp.equilibrium == Equilibrium::Consistent,
-        "solve_time_us": s.solve_time.as_secs_f64() * 1e6,
-        "warnings": s.warnings,
-    })
+    );
+    o.insert(
+        "joint_names".into(),
+        json!((0..model.joints())
+            .map(|j| model.joint_name(j))
+            .collect::<Vec<_>>()),
+    );
+    o.insert(
+        "contact_models".into(),
+        json!(qp
+            .contacts
+            .iter()
+            .map(|c| c.model.name())
+            .collect::<Vec<_>>()),
+    );
+    o.insert(
+        "passive_internal_forces".into(),
+        json!({"dimension": model.passive_dim(), "assumption": model.internal_forces.name()}),
+    );
+    o.insert("backend".into(), json!(backend));
+    o.insert("cones".into(), json!(cones));
+    if let Some(lin) = qp.constraints.linearization {
+        o.insert("sides".into(), json!(lin.sides));
+        o.insert("latitudes".into(), json!(lin.latitudes));
+    }
+    o.insert("constraint_rows".into(), json!(qp.inequality_rows()));
+    o.insert(
+        "consistency".into(),
+        json!(model.equilibrium == Equilibrium::Consistent),
+    );
+    v
 }
 
-fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &str) -> String {
+/// A force component for the report: below the problem's rounding level it is 0.
+fn component(v: f64, zero: f64) -> String {
+    if v.abs() <= zero {
+        "0".into()
+    } else {
+        g(v, 5)
+    }
+}
+
+fn text_report(
+    name: &str,
+    qp: &TorqueQp,
+    s: &Solution,
+    backend: &str,
+    cones: &str,
+    w: &[f64; 6],
+) -> String {
     use std::fmt::Write;
+    let model = &qp.model;
     let mut o = String::new();
-    let lin = qp.linearization;
     let _ = writeln!(o, "problem   {name}");
+    let cone_text = match qp.constraints.linearization {
+        Some(lin) if !qp.constraints.has_exact() => format!(
+            "inscribed cones with {} linear rows (N = {}, K = {})",
+            qp.inequality_rows(),
+            lin.sides,
+            lin.latitudes
+        ),
+        _ => "exact cones".to_string(),
+    };
     let _ = writeln!(
         o,
-        "model     {} joints, {} contacts, {} inequality rows (N = {}, K = {}), {}",
+        "model     {} joints, {} contacts, {cone_text}, {}",
         qp.joints(),
         qp.contacts.len(),
-        qp.inequality_rows(),
-        lin.sides,
-        lin.latitudes,
-        match qp.equilibrium {
+        match model.equilibrium {
             Equilibrium::Consistent => format!("{} consistency equalities", qp.equality_rows()),
             Equilibrium::PaperModel => "paper model (no consistency equalities)".to_string(),
         }
     );
+    if model.passive_dim() > 0 {
+        let _ = writeln!(
+            o,
+            "          [G; Jᵀ] has a {}-dimensional null space (passive internal forces), fixed by `{}`",
+            model.passive_dim(),
+            model.internal_forces.name()
+        );
+    }
     let _ = writeln!(o, "backend   {backend}, {cones} cones");
     let _ = writeln!(o, "status    {}", s.status);
     if let Some(r) = &s.reason {
@@ -147,61 +224,88 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
     }
     let _ = writeln!(o, "objective σ = Σ w τ² = {}", g(s.objective, 10));
     let _ = writeln!(o, "\njoint torques");
-    for (j, t) in s.torque.iter().enumerate() {
-        let _ = writeln!(o, "  τ{j:<3} {:>14}", g(*t, 7));
+    let names: Vec<String> = (0..model.joints()).map(|j| model.joint_name(j)).collect();
+    let width = names.iter().map(|n| n.chars().count()).max().unwrap_or(0);
+    for (n, t) in names.iter().zip(&s.torque) {
+        let _ = writeln!(o, "  {n:<width$}  {:>12}", g(*t, 7));
     }
+    // Components below the check's tolerance of the largest force are rounding.
+    let fmax = s.contact_forces.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let zero = s.diagnostics.check_tolerance * fmax;
     let _ = writeln!(
         o,
-        "\ncontact forces (contact frame)                 exact-cone margin"
+        "\ncontact forces (contact frame)   {:>11} {:>11} {:>11} {:>11}   exact-cone margin",
+        "fx", "fy", "fz", "mz"
     );
     for (i, c) in qp.contacts.iter().enumerate() {
         let f = &s.contact_forces[c.offset..c.offset + c.model.dim()];
-        let names: &[&str] = match c.model.dim() {
-            1 => &["fz"],
-            3 => &["fx", "fy", "fz"],
-            _ => &["fx", "fy", "fz", "mz"],
+        let slots: [Option<f64>; 4] = match c.model.dim() {
+            1 => [None, None, Some(f[0]), None],
+            3 => [Some(f[0]), Some(f[1]), Some(f[2]), None],
+            _ => [Some(f[0]), Some(f[1]), Some(f[2]), Some(f[3])],
         };
-        let comps: Vec<String> = names
+        let cells: Vec<String> = slots
             .iter()
-            .zip(f)
-            .map(|(n, v)| format!("{n} {}", g(*v, 5)))
+            .map(|v| v.map_or("—".into(), |x| component(x, zero)))
+            .map(|t| format!("{t:>11}"))
             .collect();
+        let margin = match s.diagnostics.friction_margins.get(i).copied().flatten() {
+            Some(m) => g(m, 4),
+            None => "unloaded".into(),
+        };
         let _ = writeln!(
             o,
-            "  {i:<3} {:<5} {:<38} {:>8}",
+            "  {i:<3} {:<5}                    {}   {margin:>8}",
             c.model.name(),
-            comps.join("  "),
-            g(s.diagnostics.friction_margins[i], 4)
+            cells.join(" ")
         );
     }
     let d = &s.diagnostics;
-    let _ = writeln!(o, "\nchecks");
+    let (is_held, tol) = held(qp, s, w);
+    let _ = writeln!(o, "\nchecks (relative tolerance {:.0e})", d.check_tolerance);
     let _ = writeln!(
         o,
-        "  ‖G f − w‖∞  {:>10}   (the object is held)",
-        g(d.wrench_residual, 3)
+        "  ‖G f − w‖∞  {:>10}   {}",
+        g(d.wrench_residual, 3),
+        if is_held {
+            format!("(the object is held: ≤ {})", g(tol, 2))
+        } else {
+            format!("(the object is NOT held: > {})", g(tol, 2))
+        }
     );
     let _ = writeln!(
         o,
         "  ‖Jᵀf − τ‖∞  {:>10}   (the joints produce f)",
         g(d.torque_residual, 3)
     );
-    let _ = writeln!(
-        o,
-        "  ‖C τ − e‖∞  {:>10}   (consistency)",
-        g(d.consistency_residual, 3)
-    );
-    let _ = writeln!(
-        o,
-        "  max(c − Hτ) {:>10}   (linearised cones)",
-        g(d.max_violation, 3)
-    );
+    if model.equilibrium == Equilibrium::Consistent {
+        let _ = writeln!(
+            o,
+            "  ‖C τ − e‖∞  {:>10}   (consistency)",
+            g(d.consistency_residual, 3)
+        );
+    }
+    if qp.constraints.has_exact() {
+        let _ = writeln!(
+            o,
+            "  max(g(f) − fz) {:>7}   (exact cones; ≤ 0 inside)",
+            g(d.cone_violation, 3)
+        );
+        let _ = writeln!(
+            o,
+            "  max(c − Hτ) {:>10}   (minimum normal forces and torque limits)",
+            g(d.max_violation, 3)
+        );
+    } else {
+        let _ = writeln!(
+            o,
+            "  max(c − Hτ) {:>10}   (inscribed cones, minimum normal forces, torque limits)",
+            g(d.max_violation, 3)
+        );
+    }
     let _ = writeln!(o, "\niterations  {}", s.iterations);
     if let Some(a) = &s.active_set {
-        let rows: Vec<String> = a
-            .iter()
-            .map(|&r| format!("{r} ({})", qp.describe_row(r)))
-            .collect();
+        let rows: Vec<String> = a.iter().map(|&r| format!("{r} ({})", qp.rows[r])).collect();
         let _ = writeln!(
             o,
             "key set     {}",

@@ -8,11 +8,12 @@ use anyhow::{bail, Result};
 use clap::ValueEnum;
 use grasp_torque::matrix::norm_inf;
 use grasp_torque::{
-    solve, ActiveSetSettings, ActiveSetSolver, GraspProblem, ModelOptions, Solution, Status,
-    TorqueQp, WarmStart,
+    solve, ActiveSetSettings, ActiveSetSolver, ForceSpaceQp, ForceSpaceSolver, GraspModel,
+    GraspProblem, ModelOptions, Solution, Status, TorqueQp, WarmStart,
 };
 use serde_json::json;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub(crate) enum TableFormat {
@@ -60,10 +61,13 @@ fn native(qp: TorqueQp, w: &[f64; 6]) -> Result<Solution> {
 
 /// Solves both problems for one object.
 pub(crate) fn compare(name: String, p: &GraspProblem) -> Result<Row> {
-    let opts = ModelOptions::default();
-    let torque_qp = TorqueQp::new(p, &opts)?;
+    p.validate()?;
+    let model = Arc::new(GraspModel::new(p, &ModelOptions::default())?);
+    let torque_qp = TorqueQp::linearized(model.clone(), &p.linearization);
     let after = native(torque_qp.clone(), &p.wrench)?;
-    let base = native(TorqueQp::force_space(p, &opts)?, &p.wrench)?;
+    let fs = ForceSpaceQp::new(model, &p.linearization)?;
+    let mut base = Solution::default();
+    ForceSpaceSolver::new(fs, ActiveSetSettings::default())?.solve(&p.wrench, &mut base);
     if after.status != Status::Optimal || base.status != Status::Optimal {
         bail!(
             "{name}: torque space {} ({}), force space {} ({})",
@@ -84,7 +88,7 @@ pub(crate) fn compare(name: String, p: &GraspProblem) -> Result<Row> {
         torque: before.clone(),
         ..Default::default()
     };
-    torque_qp.complete(&p.wrench, &mut check);
+    torque_qp.complete(&p.wrench, 1e-9, "baseline", &mut check);
     let d = &check.diagnostics;
     let scale = norm_inf(&p.wrench)
         .max(norm_inf(&check.contact_forces))

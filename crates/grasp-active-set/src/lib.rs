@@ -25,7 +25,10 @@
 
 use grasp_core::linalg::svd;
 use grasp_core::matrix::{dot, norm_inf};
-use grasp_core::{Matrix, Reason, Solution, Status, TorqueQp, TorqueSolver, WarmStart};
+use grasp_core::{
+    Capabilities, ForceSpaceQp, LeastDistance, Matrix, Reason, RowId, Solution, Status, TorqueQp,
+    TorqueSolver, WarmStart,
+};
 
 mod factor;
 use factor::Factor;
@@ -141,10 +144,30 @@ pub enum BuildError {
     /// Bad settings.
     #[error(transparent)]
     Settings(#[from] SettingsError),
-    /// The null-space decomposition failed.
+    /// The null-space decomposition of the consistency equalities failed.
     #[error(transparent)]
     Svd(#[from] grasp_core::linalg::SvdError),
+    /// The consistency equalities the core handed over are dependent in the weighted
+    /// torque coordinates (torque weights too far apart).
+    #[error("the consistency equalities are numerically dependent after weighting (condition {condition:.1e}); bring the torque weights closer together")]
+    DependentEqualities {
+        /// Ratio of the largest to the smallest singular value of `C D⁻¹`.
+        condition: f64,
+    },
 }
+
+/// What the native backend supports.
+pub const CAPABILITIES: Capabilities = Capabilities {
+    exact_cones: false,
+    free_internal_forces: false,
+    warm_key_set: true,
+    warm_torque: true,
+};
+
+/// Relative accuracy of the native backend's answers: the tolerance of the core's
+/// final residual check. Its iterates satisfy rows to 1e-9 of the problem's scale in
+/// normalised coordinates; the residuals of `G f = w` are at rounding level.
+pub const RESIDUAL_TOLERANCE: f64 = 1e-8;
 
 /// Marker for the elastic bound `s ≥ 0` in the key set.
 const S_ROW: usize = usize::MAX;
@@ -153,6 +176,26 @@ const S_ROW: usize = usize::MAX;
 #[derive(Clone, Debug)]
 pub struct ActiveSetSolver {
     qp: TorqueQp,
+    engine: Engine,
+}
+
+/// The native solver on the contact-force-space baseline ([`ForceSpaceQp`]): its
+/// "torque" is the contact force f.
+#[derive(Clone, Debug)]
+pub struct ForceSpaceSolver {
+    engine: Engine,
+    fs: ForceSpaceQp,
+}
+
+/// The least-distance solver proper, on any [`LeastDistance`] data.
+#[derive(Clone, Debug)]
+struct Engine {
+    /// Identity of each inequality row.
+    rows: Vec<RowId>,
+    /// The constant right-hand side of each row, for the fixed-row tolerance.
+    c0: Vec<f64>,
+    /// Variables.
+    m: usize,
     settings: ActiveSetSettings,
     /// `1/√w_j`.
     dinv: Vec<f64>,
@@ -195,28 +238,87 @@ struct Workspace {
 }
 
 impl ActiveSetSolver {
-    /// Precomputes everything that depends only on the grasp.
+    /// Precomputes everything that depends only on the grasp. The problem must have
+    /// only inscribed cones and fixed internal forces ([`CAPABILITIES`]).
     pub fn new(qp: TorqueQp, settings: ActiveSetSettings) -> Result<Self, BuildError> {
+        let engine = Engine::new(&qp.least_distance(), settings)?;
+        Ok(Self { qp, engine })
+    }
+
+    /// The settings in use.
+    pub fn settings(&self) -> &ActiveSetSettings {
+        &self.engine.settings
+    }
+
+    /// Dimension k of the reduced space (joints minus independent consistency rows).
+    pub fn reduced_dim(&self) -> usize {
+        self.engine.null_basis.ncols()
+    }
+}
+
+impl ForceSpaceSolver {
+    /// Precomputes everything that depends only on the grasp.
+    pub fn new(fs: ForceSpaceQp, settings: ActiveSetSettings) -> Result<Self, BuildError> {
+        let engine = Engine::new(&fs.least_distance(), settings)?;
+        Ok(Self { engine, fs })
+    }
+
+    /// The optimal contact forces for `w` into `out.torque` (status, reason and
+    /// iterations as for a torque solve; the other fields are left empty).
+    pub fn solve(&mut self, w: &[f64; 6], out: &mut Solution) {
+        out.reason = None;
+        let residual = self.fs.unreachable_residual(w);
+        if residual > 10.0 * self.fs.model.rank_tolerance * norm_inf(w).max(f64::MIN_POSITIVE) {
+            out.status = Status::Infeasible;
+            out.reason = Some(Reason::UnreachableWrench { residual });
+            out.torque.clear();
+            return;
+        }
+        self.engine.solve(w, &WarmStart::default(), out);
+    }
+
+    /// The problem.
+    pub fn problem(&self) -> &ForceSpaceQp {
+        &self.fs
+    }
+}
+
+impl Engine {
+    fn new(qp: &LeastDistance<'_>, settings: ActiveSetSettings) -> Result<Self, BuildError> {
         settings.validate()?;
-        let m = qp.joints();
+        let m = qp.h.ncols();
         let dinv: Vec<f64> = qp.weights.iter().map(|w| 1.0 / w.sqrt()).collect();
         let scale_cols = |a: &Matrix| Matrix::from_fn(a.nrows(), m, |i, j| a[(i, j)] * dinv[j]);
-        let cd = scale_cols(&qp.eq);
+        let cd = scale_cols(qp.eq);
         let dec = svd(&cd)?;
-        let rc = dec.rank(qp.rank_tolerance);
+        // The core decided the rank: every row of C is independent.
+        let rc = qp.eq.nrows();
+        if rc > 0 {
+            let (smax, smin) = (dec.s[0], dec.s[rc - 1]);
+            if smin.is_nan() || smin <= 1e-13 * smax {
+                return Err(BuildError::DependentEqualities {
+                    condition: smax / smin,
+                });
+            }
+        }
         let k = m - rc;
         let null_basis = Matrix::from_fn(m, k, |i, j| dec.v[(i, rc + j)]);
-        // u0 = Cd⁺ e = −Cd⁺ eq_w w.
-        let pu = dec.pseudo_inverse(qp.rank_tolerance).matmul(&qp.eq_w);
+        // u0 = Cd⁺ e = −Cd⁺ eq_w w, with Cd⁺ = V Σ⁻¹ Uᵀ over all rc rows.
+        let pinv = Matrix::from_fn(m, rc, |i, j| {
+            (0..rc)
+                .map(|t| dec.v[(i, t)] * dec.u[(j, t)] / dec.s[t])
+                .sum()
+        });
+        let pu = pinv.matmul(qp.eq_w);
         let pu = Matrix::from_fn(m, 6, |i, j| -pu[(i, j)]);
-        let hd = scale_cols(&qp.h);
+        let hd = scale_cols(qp.h);
         let hn = hd.matmul(&null_basis);
         // ĉ(w) = c0 − (hw + Hd pu) w, before normalisation.
+        let rows = qp.h.nrows();
         let mfull = {
             let hp = hd.matmul(&pu);
-            Matrix::from_fn(qp.inequality_rows(), 6, |i, j| qp.hw[(i, j)] + hp[(i, j)])
+            Matrix::from_fn(rows, 6, |i, j| qp.hw[(i, j)] + hp[(i, j)])
         };
-        let rows = qp.inequality_rows();
         let norms: Vec<f64> = (0..rows)
             .map(|i| grasp_core::matrix::norm2(hn.row(i)))
             .collect();
@@ -257,7 +359,9 @@ impl ActiveSetSolver {
             factor: Factor::new(kp),
         };
         Ok(Self {
-            qp,
+            rows: qp.rows.to_vec(),
+            c0: qp.c0.to_vec(),
+            m,
             settings,
             dinv,
             null_basis,
@@ -273,16 +377,6 @@ impl ActiveSetSolver {
             fixed_m,
             ws,
         })
-    }
-
-    /// The settings in use.
-    pub fn settings(&self) -> &ActiveSetSettings {
-        &self.settings
-    }
-
-    /// Dimension k of the reduced space (joints minus independent consistency rows).
-    pub fn reduced_dim(&self) -> usize {
-        self.null_basis.ncols()
     }
 }
 
@@ -301,11 +395,31 @@ impl TorqueSolver for ActiveSetSolver {
         "active-set"
     }
 
+    fn capabilities(&self) -> Capabilities {
+        CAPABILITIES
+    }
+
+    fn residual_tolerance(&self) -> f64 {
+        RESIDUAL_TOLERANCE
+    }
+
     fn problem(&self) -> &TorqueQp {
         &self.qp
     }
 
     fn solve_raw(&mut self, w: &[f64; 6], warm: &WarmStart<'_>, out: &mut Solution) {
+        self.engine.solve(w, warm, out);
+        // A warm start may make a solve slower, never wrong: retry a failure cold.
+        if !warm.is_cold() && !matches!(out.status, Status::Optimal | Status::Infeasible) {
+            let iterations = out.iterations;
+            self.engine.solve(w, &WarmStart::default(), out);
+            out.iterations += iterations;
+        }
+    }
+}
+
+impl Engine {
+    fn solve(&mut self, w: &[f64; 6], warm: &WarmStart<'_>, out: &mut Solution) {
         out.torque.clear();
         out.iterations = 0;
         let active = out.active_set.get_or_insert_with(Vec::new);
@@ -313,13 +427,19 @@ impl TorqueSolver for ActiveSetSolver {
         // Rows that no torque affects must hold for the wrench alone.
         for (r, &row) in self.fixed.iter().enumerate() {
             let c = self.fixed_c0[r] - dot(self.fixed_m.row(r), w);
-            let tol = self.settings.feasibility_tolerance
-                * self.qp.c0[row].abs().max(norm_inf(w)).max(1.0);
-            if c > tol {
+            // Relative to the row's own terms: the same in any units.
+            let scale = self.c0[row].abs()
+                + self
+                    .fixed_m
+                    .row(r)
+                    .iter()
+                    .zip(w)
+                    .map(|(a, b)| (a * b).abs())
+                    .sum::<f64>();
+            if c > self.settings.feasibility_tolerance * scale {
                 out.status = Status::Infeasible;
                 out.reason = Some(Reason::FixedRowViolated {
-                    row,
-                    description: self.qp.describe_row(row),
+                    row: self.rows[row],
                     violation: c,
                 });
                 out.active_set = None;
@@ -354,17 +474,20 @@ impl TorqueSolver for ActiveSetSolver {
                     out.active_set = None;
                 }
                 out.status = Status::IterationLimit;
-                out.reason = Some(Reason::Backend(format!(
-                    "stopped after {iterations} iterations (max_iterations = {})",
-                    self.settings.max_iterations
-                )));
+                out.reason = Some(Reason::Backend {
+                    backend: "active-set",
+                    message: format!(
+                        "stopped after {iterations} iterations (max_iterations = {})",
+                        self.settings.max_iterations
+                    ),
+                });
             }
             End::Infeasible(row) => {
                 out.status = Status::Infeasible;
                 let mut blocking = self.blocking_description();
                 let relaxation = match row {
                     Some(r) => {
-                        blocking.push(self.qp.describe_row(self.h_row[r]));
+                        blocking.push(self.rows[self.h_row[r]]);
                         None
                     }
                     None => Some(self.ws.z[k]),
@@ -377,22 +500,25 @@ impl TorqueSolver for ActiveSetSolver {
             }
             End::Numerical(why) => {
                 out.status = Status::NumericalFailure;
-                out.reason = Some(Reason::Backend(why.to_string()));
+                out.reason = Some(Reason::Backend {
+                    backend: "active-set",
+                    message: why.to_string(),
+                });
                 out.active_set = None;
             }
         }
     }
 }
 
-impl ActiveSetSolver {
-    /// The key-set rows at the end, described, for infeasibility reports.
-    fn blocking_description(&self) -> Vec<String> {
+impl Engine {
+    /// The key-set rows at the end, for infeasibility reports.
+    fn blocking_description(&self) -> Vec<RowId> {
         self.ws
             .factor
             .rows()
             .iter()
             .filter(|&&r| r != S_ROW)
-            .map(|&r| self.qp.describe_row(self.h_row[r]))
+            .map(|&r| self.rows[self.h_row[r]])
             .collect()
     }
 
@@ -400,7 +526,7 @@ impl ActiveSetSolver {
     fn write_solution(&self, out: &mut Solution) {
         let ws = &self.ws;
         let k = self.null_basis.ncols();
-        let m = self.qp.joints();
+        let m = self.m;
         out.torque.resize(m, 0.0);
         for j in 0..m {
             out.torque[j] = (ws.u[j] + dot(self.null_basis.row(j), &ws.z[..k])) * self.dinv[j];
@@ -408,7 +534,7 @@ impl ActiveSetSolver {
         let active = out.active_set.get_or_insert_with(Vec::new);
         active.clear();
         out.multipliers.clear();
-        out.multipliers.resize(self.qp.inequality_rows(), 0.0);
+        out.multipliers.resize(self.rows.len(), 0.0);
         for (pos, &r) in ws.factor.rows().iter().enumerate() {
             if r != S_ROW {
                 active.push(self.h_row[r]);
@@ -422,7 +548,7 @@ impl ActiveSetSolver {
 
 /// One run of the iteration, borrowing the solver.
 struct Iter<'s> {
-    s: &'s mut ActiveSetSolver,
+    s: &'s mut Engine,
     iterations: usize,
     /// Set by a dual phase 1 that proved no torque exists: the row it could not satisfy.
     infeasible: Option<usize>,
@@ -432,10 +558,12 @@ struct Iter<'s> {
     penalty: f64,
     scale: f64,
     bland: bool,
+    /// Set when the dual phase stopped making progress; the elastic start takes over.
+    stalled: bool,
 }
 
 impl<'s> Iter<'s> {
-    fn new(s: &'s mut ActiveSetSolver) -> Self {
+    fn new(s: &'s mut Engine) -> Self {
         let scale = norm_inf(&s.ws.b).max(f64::MIN_POSITIVE);
         let penalty = s.settings.elastic_penalty * scale.max(1e-12);
         Self {
@@ -446,6 +574,7 @@ impl<'s> Iter<'s> {
             penalty,
             scale,
             bland: false,
+            stalled: false,
         }
     }
 
@@ -549,11 +678,15 @@ impl<'s> Iter<'s> {
                         Ok(true) => self.certify(),
                         Ok(false) => {}
                     }
+                    if !self.stalled {
+                        return;
+                    }
+                    self.restart_elastic();
+                } else {
+                    // Feasible, and the multipliers from that solve are at hand.
+                    self.certified = self.multipliers_nonnegative();
                     return;
                 }
-                // Feasible, and the multipliers from that solve are at hand.
-                self.certified = self.multipliers_nonnegative();
-                return;
             }
         } else if let Some(t) = warm.torque {
             // y0 = Nᵀ(D τ − u0).
@@ -572,7 +705,10 @@ impl<'s> Iter<'s> {
                 Ok(true) => self.certify(),
                 Ok(false) => {}
             }
-            return;
+            if !self.stalled {
+                return;
+            }
+            self.restart_elastic();
         }
         // Elastic variable for the rows y0 violates.
         self.refresh_residuals();
@@ -610,6 +746,18 @@ impl<'s> Iter<'s> {
                 }
             }
         }
+    }
+
+    /// Forgets the key set and the point: the elastic start from y = 0 follows.
+    fn restart_elastic(&mut self) {
+        let ws = &mut self.s.ws;
+        ws.z.iter_mut().for_each(|v| *v = 0.0);
+        ws.e.iter_mut().for_each(|v| *v = 0.0);
+        ws.in_set.iter_mut().for_each(|v| *v = false);
+        ws.factor.clear();
+        ws.mult.clear();
+        self.stalled = false;
+        self.bland = false;
     }
 
     /// Cold-start phase 1 (with [`Phase1::Dual`]): the dual active-set method of
@@ -665,6 +813,7 @@ impl<'s> Iter<'s> {
     /// multipliers `mult` are non-negative and whose minimiser is `z`. `Ok(true)` when
     /// it reached a feasible (hence optimal) point, `Ok(false)` at the iteration cap.
     fn dual_iterate(&mut self) -> Result<bool, usize> {
+        let mut stalls = 0usize;
         let k = self.k();
         let n = k + 1;
         let max_it = self.s.settings.max_iterations;
@@ -716,7 +865,9 @@ impl<'s> Iter<'s> {
                 } else {
                     f64::INFINITY
                 };
-                let step = t1.0.min(t2);
+                // A full step (row p joins) or a partial one (a key-set row leaves).
+                let full = t2 <= t1.0;
+                let step = if full { t2 } else { t1.0 };
                 if step.is_infinite() {
                     return Err(p);
                 }
@@ -730,9 +881,18 @@ impl<'s> Iter<'s> {
                         ws.z[j] += step * ws.zstar[j];
                     }
                 }
-                if step == t2 {
+                if full {
                     if self.add(p) {
                         self.s.ws.mult.push(lam_p);
+                        stalls = 0;
+                    } else {
+                        // p depends on the key set numerically though the step said
+                        // otherwise: the same row would be picked again.
+                        stalls += 1;
+                        if stalls > n {
+                            self.stalled = true;
+                            return Ok(false);
+                        }
                     }
                     break;
                 }
@@ -790,7 +950,13 @@ impl<'s> Iter<'s> {
             if at_minimum || dmax <= 1e3 * f64::EPSILON * kp as f64 * zmax {
                 at_minimum = false;
                 // Step 4: multipliers of the key set.
-                let tol = self.s.settings.multiplier_tolerance * zmax;
+                // While s is free, multipliers carry the penalty's scale.
+                let mscale = if self.s.ws.factor.contains(S_ROW) {
+                    zmax
+                } else {
+                    zmax.max(self.penalty)
+                };
+                let tol = self.s.settings.multiplier_tolerance * mscale;
                 let rows = self.s.ws.factor.rows();
                 let mut drop: Option<(usize, f64)> = None;
                 for (pos, &r) in rows.iter().enumerate() {
@@ -844,9 +1010,9 @@ impl<'s> Iter<'s> {
                 self.s.ws.ad[i] = ad;
                 if ad < -dep {
                     let ratio = self.s.ws.resid[i].max(0.0) / -ad;
-                    if ratio < alpha
-                        || (self.bland && ratio == alpha && block.is_some_and(|b| i < b))
-                    {
+                    // Rows are scanned in index order, so under Bland's rule the first
+                    // of tied rows (the smallest index) is kept.
+                    if ratio < alpha {
                         alpha = ratio;
                         block = Some(i);
                     }
@@ -877,7 +1043,7 @@ impl<'s> Iter<'s> {
                     if p == S_ROW {
                         self.s.ws.z[k] = 0.0;
                     }
-                    if alpha == 0.0 {
+                    if alpha * dnorm <= 1e3 * f64::EPSILON * zmax {
                         degenerate += 1;
                         if degenerate > kp {
                             self.bland = true;

@@ -3,17 +3,10 @@
 //! objectives (N = 4, 8, 16) to 1e-6 relative, and the paper model's answer.
 
 use grasp_active_set::{ActiveSetSettings, ActiveSetSolver, Phase1};
-use grasp_core::file::MatrixFile;
 use grasp_core::{solve, Equilibrium, ModelOptions, Status, TorqueQp, WarmStart};
 
 fn cases() -> Vec<serde_json::Value> {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../tests/data/reference-cases.json"
-    );
-    let text = std::fs::read_to_string(path).expect("reference cases");
-    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    v["cases"].as_array().unwrap().clone()
+    grasp_testkit::reference_cases()
 }
 
 fn solve_case(problem: &serde_json::Value, sides: usize, eq: Equilibrium) -> grasp_core::Solution {
@@ -26,10 +19,9 @@ fn solve_with(
     eq: Equilibrium,
     settings: ActiveSetSettings,
 ) -> grasp_core::Solution {
-    let file: MatrixFile = serde_json::from_value(problem.clone()).unwrap();
-    let mut p = file.into_problem().unwrap();
+    let mut p = grasp_testkit::reference_problem(problem);
     p.linearization.sides = sides;
-    let qp = TorqueQp::new(
+    let qp = TorqueQp::from_problem(
         &p,
         &ModelOptions {
             equilibrium: eq,
@@ -99,12 +91,10 @@ fn geometry_form_gives_the_reference_objectives() {
     let mut checked = 0;
     for case in cases().iter().filter(|c| c.get("geometry").is_some()) {
         let name = case["name"].as_str().unwrap();
-        let geo: grasp_core::geometry::GeometryFile =
-            serde_json::from_value(case["geometry"].clone()).unwrap();
-        let mut p = geo.into_problem().unwrap();
+        let mut p = grasp_testkit::reference_geometry(&case["geometry"]);
         for (variant, sides) in [("N4", 4), ("N8", 8), ("N16", 16)] {
             p.linearization.sides = sides;
-            let qp = TorqueQp::new(&p, &ModelOptions::default()).unwrap();
+            let qp = TorqueQp::from_problem(&p, &ModelOptions::default()).unwrap();
             let mut s = ActiveSetSolver::new(qp, ActiveSetSettings::default()).unwrap();
             let sol = solve(&mut s, &p.wrench, &WarmStart::default()).unwrap();
             let want = case["reference"][variant]["objective"].as_f64().unwrap();

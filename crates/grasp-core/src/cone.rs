@@ -22,11 +22,13 @@ pub const MAX_LATITUDES: usize = 256;
 #[serde(rename_all = "lowercase")]
 pub enum SfceSpacing {
     /// The paper's eq. 13: polar angles `ψi = πi/(2K)` uniform in the `(r, mz)` plane.
-    /// When `mu_torsion ≪ mu` this crowds the latitudes near the pole.
-    #[default]
+    /// That plane mixes a pure number with a length, so the vertices, and σ(N), change
+    /// with the unit of length; when `mu_torsion ≪ mu` the latitudes crowd at the pole.
     Paper,
     /// Uniform in the normalised ellipse angle `αi = πi/(2K)`:
-    /// `r = mu·cos αi`, `mz = mu_torsion·sin αi`.
+    /// `r = mu·cos αi`, `mz = mu_torsion·sin αi` (eq. 13 applied to `mz/mu_torsion`).
+    /// Unit-free. The default.
+    #[default]
     Uniform,
 }
 
@@ -38,7 +40,7 @@ pub struct Linearization {
     pub sides: usize,
     /// K, the number of latitudes per hemisphere for SFCe contacts (1..=256). Default 2.
     pub latitudes: usize,
-    /// Placement of the SFCe latitudes. Default: the paper's.
+    /// Placement of the SFCe latitudes. Default: uniform (unit-free).
     pub sfce_spacing: SfceSpacing,
 }
 
@@ -47,7 +49,7 @@ impl Default for Linearization {
         Self {
             sides: 8,
             latitudes: 2,
-            sfce_spacing: SfceSpacing::Paper,
+            sfce_spacing: SfceSpacing::Uniform,
         }
     }
 }

@@ -40,7 +40,8 @@ pub enum ProblemError {
 }
 
 impl ProblemError {
-    pub(crate) fn invalid(
+    /// A field with an unusable value.
+    pub fn invalid(
         field: impl Into<String>,
         expected: impl Into<String>,
         found: impl std::fmt::Display,
@@ -58,8 +59,15 @@ impl ProblemError {
 #[non_exhaustive]
 pub enum ModelError {
     /// A decomposition failed to converge.
-    #[error(transparent)]
-    Svd(#[from] crate::linalg::SvdError),
+    #[error("the singular value decomposition of {what} ({rows}×{cols}) did not converge; check its entries for extreme magnitudes")]
+    Decomposition {
+        /// Which matrix.
+        what: &'static str,
+        /// Its rows.
+        rows: usize,
+        /// Its columns.
+        cols: usize,
+    },
     /// The rank tolerance is not in `(0, 1)`.
     #[error("rank_tolerance must be in (0, 1), got {0}")]
     RankTolerance(f64),

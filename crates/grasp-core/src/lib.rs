@@ -1,32 +1,31 @@
 //! Core model of grasp-torque: contact models, inscribed friction cones, the
-//! decomposition `f = Z1 w + Z2 τ`, the consistency equalities, and the torque QP
-//! `min Σ w_j τ_j²  s.t.  H τ ≥ c, C τ = e`, with the [`TorqueSolver`] trait every
-//! backend implements.
+//! [`GraspModel`] (`f = Z1 w + Z2 τ + N ξ` and the consistency equalities, built once
+//! per grasp), typed constraint blocks ([`Constraints`]), the linear view
+//! [`TorqueQp`] (`min Σ w_j τ_j²  s.t.  H τ ≥ c, C τ = e`), and the [`TorqueSolver`]
+//! trait every backend implements.
 //!
-//! This crate depends on no solver. Equation numbers refer to Jia et al., "Grasping
+//! This crate depends on no solver and reads no file format. Equation numbers refer to Jia et al., "Grasping
 //! Torque Optimization for a Dexterous Robotic Hand Using the Linearization of
 //! Constraints".
 
 pub mod cone;
 pub mod contact;
 pub mod error;
-pub mod file;
-pub mod geometry;
 pub mod linalg;
 pub mod matrix;
+pub mod model;
 pub mod problem;
 pub mod qp;
 pub mod solver;
-pub mod synth;
 
 pub use cone::{inscribed_cone, InscribedCone, Linearization, SfceSpacing};
 pub use contact::ContactModel;
 pub use error::{ModelError, ProblemError};
-pub use file::{load_problem, parse_problem};
 pub use matrix::Matrix;
+pub use model::{Equilibrium, GraspModel, InternalForces, ModelOptions};
 pub use problem::GraspProblem;
-pub use qp::{ContactBlock, Equilibrium, ModelOptions, RowKind, TorqueQp};
+pub use qp::{ConeRepr, Constraints, ContactBlock, ForceSpaceQp, LeastDistance, RowId, TorqueQp};
 pub use solver::{
-    solve, solve_into, Diagnostics, Reason, Solution, Status, TorqueSolver, WarmStart,
-    WarmStartError,
+    solve, solve_into, Capabilities, Diagnostics, Reason, Solution, Status, TorqueSolver,
+    WarmStart, WarmStartError,
 };

@@ -4,10 +4,16 @@ use crate::cone::Linearization;
 use crate::contact::ContactModel;
 use crate::error::ProblemError;
 use crate::matrix::Matrix;
+use crate::model::InternalForces;
 
 /// Most inequality rows a problem may have: H is dense, so this bounds its memory
 /// (about 8 bytes × rows × joints, plus S: rows × force components).
 pub const MAX_ROWS: usize = 1 << 20;
+
+/// Largest ratio between two torque weights. The native solver works in `√w_j τ_j`;
+/// beyond this the consistency equalities lose accuracy in those coordinates
+/// (a ratio of 1e18 left `‖C τ − e‖∞` at 1e-6).
+pub const MAX_WEIGHT_RATIO: f64 = 1e8;
 
 /// Everything that defines one grasp-torque problem.
 ///
@@ -36,6 +42,8 @@ pub struct GraspProblem {
     pub initial_torque: Option<Vec<f64>>,
     /// Joint names for reports (from a geometry file; empty when unknown).
     pub joint_names: Vec<String>,
+    /// How the passive internal forces (the null space of `[G; Jᵀ]`) are fixed.
+    pub internal_forces: InternalForces,
 }
 
 impl GraspProblem {
@@ -57,6 +65,7 @@ impl GraspProblem {
             min_normal_force: None,
             initial_torque: None,
             joint_names: Vec::new(),
+            internal_forces: InternalForces::default(),
         }
     }
 
@@ -175,6 +184,21 @@ impl GraspProblem {
                         v,
                     ));
                 }
+            }
+            let lo = w.iter().copied().fold(f64::INFINITY, f64::min);
+            let (j, hi) =
+                w.iter()
+                    .copied()
+                    .enumerate()
+                    .fold((0, 0.0), |a, (j, v)| if v > a.1 { (j, v) } else { a });
+            if hi / lo > MAX_WEIGHT_RATIO {
+                return Err(ProblemError::invalid(
+                    format!("torque_weights[{j}]"),
+                    format!(
+                        "weights within a ratio of {MAX_WEIGHT_RATIO:e} of each other (the smallest is {lo:e})"
+                    ),
+                    hi,
+                ));
             }
         }
         if let Some(l) = &self.torque_limits {

@@ -1,69 +1,42 @@
-//! The torque QP (paper sections 3–4, eqs. 31, 39, 43), with the consistency equalities
-//! the paper omits.
+//! Constraint representations and the linearised torque QP, a view of a
+//! [`GraspModel`] and a [`Constraints`] (paper sections 3–4, eqs. 39, 43).
 //!
-//! With `A = [G; Jᵀ]` and `Z = A⁺ = [Z1 Z2]`, the contact forces are `f = Z1 w + Z2 τ`
-//! (eq. 31, passive internal forces taken as zero). This balances `w` only when
-//! `[w; τ]` lies in the range of A; with `U⊥` an orthonormal basis of the range's
-//! complement that is `C τ = e` with `C = U⊥ᵀ[:, 6:]`, `e = −U⊥ᵀ[:, :6] w`.
-//! The problem solved is
+//! Each contact's cone is a typed block: exact, or an inscribed polyhedron. The linear
+//! rows are, per contact, the inscribed faces (`S_c f_c ≥ 0`) or none, then its minimum
+//! normal force `fz ≥ f_min`, and after all contacts the torque limits. With
+//! `f = Z1 w + Z2 τ + N ξ` they read
 //!
 //! ```text
-//! minimise Σ w_j τ_j²   subject to   H τ ≥ c(w),   C τ = e(w)
+//! H τ + Hp ξ ≥ c(w) = c0 − Hw w,      H = S Z2, Hw = S Z1, Hp = S N   (eqs. 39, 43)
 //! ```
 //!
-//! with `H = S Z2`, `c = s0 − S Z1 w` (eqs. 39, 43; `s0` holds the minimum normal
-//! forces) followed by the torque-limit rows.
+//! and the problem is `min Σ w_j τ_j²` subject to those rows, `C τ = e(w)` and, for
+//! exact blocks, the exact cones. Every row carries a [`RowId`] (contact, block, face)
+//! that survives re-linearising another contact.
 
-use crate::cone::{inscribed_cone, Linearization};
+use crate::cone::{inscribed_cone, InscribedCone, Linearization};
 use crate::contact::ContactModel;
 use crate::error::ModelError;
 use crate::linalg::svd;
 use crate::matrix::{dot, Matrix};
-use crate::problem::GraspProblem;
+use crate::model::GraspModel;
+use serde::Serialize;
+use std::fmt;
+use std::sync::Arc;
 
-/// Whether `C τ = e` is enforced.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Equilibrium {
-    /// Enforce `C τ = e`: every answer balances the wrench (`G f = w`). The default.
-    #[default]
-    Consistent,
-    /// The paper's model as printed: `H τ ≥ c` alone. Its answers generally do not
-    /// balance the wrench; each carries a warning with `‖G f − w‖∞`. For reproducing the
-    /// paper's numbers only.
-    PaperModel,
-}
-
-/// How the QP is assembled.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ModelOptions {
-    /// Consistency equalities on (default) or the paper's model.
-    pub equilibrium: Equilibrium,
-    /// Relative rank tolerance for `A⁺` and the consistency rows: singular values at or
-    /// below `rank_tolerance · σ_max` count as zero. Default `1e-9`, as in the
-    /// reference implementation (`shared/reference/README.md`, item 1).
-    pub rank_tolerance: f64,
-}
-
-impl Default for ModelOptions {
-    fn default() -> Self {
-        Self {
-            equilibrium: Equilibrium::Consistent,
-            rank_tolerance: 1e-9,
-        }
-    }
-}
-
-/// What an inequality row of H stands for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RowKind {
-    /// Face `face` of contact `contact`'s inscribed cone.
+/// The stable identity of a linear constraint row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum RowId {
+    /// Face `face` of contact `contact`'s inscribed cone (eq. 50 order).
     Face {
         /// Contact index.
         contact: usize,
-        /// Face index within the contact (eq. 50 order).
+        /// Face index within the contact's cone.
         face: usize,
     },
-    /// `fz ≥ f_min` of contact `contact` (the last row of each cone).
+    /// `fz ≥ f_min` of contact `contact`.
     NormalForce {
         /// Contact index.
         contact: usize,
@@ -77,247 +50,273 @@ pub enum RowKind {
     },
 }
 
-/// One contact's place in f and in the rows of H.
+impl fmt::Display for RowId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            RowId::Face { contact, face } => write!(f, "contact {contact} face {face}"),
+            RowId::NormalForce { contact } => write!(f, "contact {contact} normal force"),
+            RowId::TorqueLimit { joint, upper } => write!(
+                f,
+                "joint {joint} {} torque limit",
+                if upper { "upper" } else { "lower" }
+            ),
+        }
+    }
+}
+
+/// One contact's friction cone, as a backend sees it.
+#[derive(Clone, Debug)]
+#[non_exhaustive]
+pub enum ConeRepr {
+    /// The exact cone (eqs. 1–4).
+    Exact,
+    /// An inscribed polyhedral cone.
+    Inscribed(InscribedCone),
+}
+
+/// The cone representation of every contact.
+#[derive(Clone, Debug)]
+pub struct Constraints {
+    /// One per contact, in contact order.
+    pub cones: Vec<ConeRepr>,
+    /// The linearisation the inscribed blocks were built with, if any.
+    pub linearization: Option<Linearization>,
+}
+
+impl Constraints {
+    /// Every contact inscribed at `lin` (assumed validated).
+    pub fn inscribed(model: &GraspModel, lin: &Linearization) -> Self {
+        Self {
+            cones: model
+                .contacts
+                .iter()
+                .map(|c| ConeRepr::Inscribed(inscribed_cone(c, lin)))
+                .collect(),
+            linearization: Some(*lin),
+        }
+    }
+
+    /// Every contact exact.
+    pub fn exact(model: &GraspModel) -> Self {
+        Self {
+            cones: vec![ConeRepr::Exact; model.contacts.len()],
+            linearization: None,
+        }
+    }
+
+    /// Whether any contact uses its exact cone.
+    pub fn has_exact(&self) -> bool {
+        self.cones.iter().any(|c| matches!(c, ConeRepr::Exact))
+    }
+}
+
+/// One contact's place in f and in the linear rows.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ContactBlock {
     /// The contact model.
     pub model: ContactModel,
     /// Index of its first force component in f.
     pub offset: usize,
-    /// Index of its first row in H.
+    /// Index of its first linear row.
     pub first_row: usize,
-    /// Its number of rows (N+1, 2N+1, 2NK+1 or 1).
+    /// Its number of linear rows (faces, then `fz ≥ f_min`).
     pub rows: usize,
 }
 
-/// The assembled torque QP for one grasp; the wrench enters only through `c(w)` and
-/// `e(w)`, so one `TorqueQp` serves any number of wrenches.
+/// A least-distance QP as the native solver reads it: minimise `Σ weights_j x_j²`
+/// subject to `h x ≥ c0 − hw w` and `eq x = −eq_w w` (`eq` with independent rows).
+#[derive(Clone, Copy, Debug)]
+pub struct LeastDistance<'a> {
+    /// Inequality rows, R × k.
+    pub h: &'a Matrix,
+    /// Constant part of the right-hand side.
+    pub c0: &'a [f64],
+    /// Wrench part of the right-hand side, R × 6.
+    pub hw: &'a Matrix,
+    /// Equality rows, p × k, independent.
+    pub eq: &'a Matrix,
+    /// Wrench part of the equalities, p × 6.
+    pub eq_w: &'a Matrix,
+    /// Objective weights, k.
+    pub weights: &'a [f64],
+    /// Identity of each inequality row.
+    pub rows: &'a [RowId],
+}
+
+/// The linear rows of a model under some constraints: the view every backend reads.
 #[derive(Clone, Debug)]
 pub struct TorqueQp {
-    /// G, 6 × n.
-    pub grasp_matrix: Matrix,
-    /// Jᵀ, m × n.
-    pub jacobian_transpose: Matrix,
-    /// Z1 = A⁺[:, :6], n × 6 (eq. 31).
-    pub z1: Matrix,
-    /// Z2 = A⁺[:, 6:], n × m (eq. 31).
-    pub z2: Matrix,
-    /// Numerical rank of A.
-    pub rank: usize,
-    /// The contacts and their rows.
+    /// The grasp.
+    pub model: Arc<GraspModel>,
+    /// The cone of each contact.
+    pub constraints: Constraints,
+    /// Each contact's rows.
     pub contacts: Vec<ContactBlock>,
-    /// The block-diagonal linearised cones S, rows × n.
-    pub s: Matrix,
-    /// H = S Z2 followed by the torque-limit rows, rows × m (eq. 43).
+    /// H, R × m.
     pub h: Matrix,
+    /// Hp = S N, R × d (d = 0 unless the internal forces are free).
+    pub hp: Matrix,
     /// `c(w) = c0 − hw · w`: the constant part (minimum normal forces, limits).
     pub c0: Vec<f64>,
-    /// `c(w) = c0 − hw · w`: S Z1, zero on limit rows, rows × 6.
+    /// `c(w) = c0 − hw · w`: S Z1, zero on limit rows, R × 6.
     pub hw: Matrix,
-    /// C, p × m (empty in the paper model).
-    pub eq: Matrix,
-    /// `e(w) = −eq_w · w`, p × 6.
-    pub eq_w: Matrix,
-    /// Left null space of C applied to e: `unreachable · w ≠ 0` means no torque can
-    /// satisfy `C τ = e` for this wrench, q × 6.
-    pub unreachable: Matrix,
-    /// Objective weights `w_j` (all 1 by default).
-    pub weights: Vec<f64>,
-    /// What each row of H stands for.
-    pub row_kinds: Vec<RowKind>,
-    /// The linearisation used.
-    pub linearization: Linearization,
-    /// Consistent or paper model.
-    pub equilibrium: Equilibrium,
-    /// The rank tolerance used.
-    pub rank_tolerance: f64,
+    /// What each row stands for.
+    pub rows: Vec<RowId>,
 }
 
-/// The block-diagonal cones of a problem, in contact order.
-struct Cones {
-    s: Matrix,
-    s0: Vec<f64>,
-    row_kinds: Vec<RowKind>,
-    contacts: Vec<ContactBlock>,
-}
-
-fn stack_cones(p: &GraspProblem) -> Cones {
-    let lin = p.linearization;
-    let total: usize = p.contacts.iter().map(|c| lin.rows_for(c)).sum();
-    let mut s = Matrix::zeros(total, p.force_dim());
-    let mut s0 = vec![0.0; total];
-    let mut row_kinds = Vec::with_capacity(total);
-    let mut contacts = Vec::with_capacity(p.contacts.len());
-    let (mut offset, mut row) = (0, 0);
-    for (ci, model) in p.contacts.iter().enumerate() {
-        let cone = inscribed_cone(model, &lin);
-        let r = cone.faces.nrows();
-        for k in 0..r {
-            s.row_mut(row + k)[offset..offset + model.dim()].copy_from_slice(cone.faces.row(k));
-            row_kinds.push(if k + 1 == r {
-                RowKind::NormalForce { contact: ci }
-            } else {
-                RowKind::Face {
-                    contact: ci,
-                    face: k,
-                }
-            });
-        }
-        if let Some(fmin) = &p.min_normal_force {
-            s0[row + r - 1] = fmin[ci];
-        }
-        contacts.push(ContactBlock {
-            model: *model,
-            offset,
-            first_row: row,
-            rows: r,
-        });
-        offset += model.dim();
-        row += r;
-    }
-    Cones {
-        s,
-        s0,
-        row_kinds,
-        contacts,
-    }
-}
-
-/// Rows `±(τ-map)_j · x ≥ −τmax_j` for the limited joints, where `tau_map` gives τ from
-/// the variables (the identity for the torque QP, Jᵀ for the force-space QP).
-fn limit_rows(
-    p: &GraspProblem,
-    tau_map: &Matrix,
-    c0: &mut Vec<f64>,
-    kinds: &mut Vec<RowKind>,
-) -> Matrix {
-    let mut rows = Vec::new();
-    if let Some(limits) = &p.torque_limits {
-        for (j, lim) in limits.iter().enumerate() {
-            if let Some(t) = *lim {
-                for upper in [false, true] {
-                    let sign = if upper { -1.0 } else { 1.0 };
-                    rows.push(tau_map.row(j).iter().map(|v| sign * v).collect::<Vec<_>>());
-                    c0.push(-t);
-                    kinds.push(RowKind::TorqueLimit { joint: j, upper });
-                }
-            }
+/// The rows of one contact: `(S_c, fmin row last)`.
+fn contact_faces(model: &GraspModel, ci: usize, repr: &ConeRepr) -> Matrix {
+    let c = &model.contacts[ci];
+    match repr {
+        ConeRepr::Inscribed(cone) => cone.faces.clone(),
+        ConeRepr::Exact => {
+            let mut row = vec![0.0; c.dim()];
+            row[c.normal_index()] = 1.0;
+            Matrix::from_rows(&[row], c.dim())
         }
     }
-    Matrix::from_rows(&rows, tau_map.ncols())
 }
 
-/// Orthonormal rows spanning the left null space of `a`, applied to `a_w`: a wrench
-/// with `result · w ≠ 0` makes `a x = −a_w w` unsolvable.
-fn unreachable_map(a: &Matrix, a_w: &Matrix, rank_tolerance: f64) -> Result<Matrix, ModelError> {
-    let p = a.nrows();
-    let d = svd(a)?;
-    let r = d.rank(rank_tolerance);
-    let left_null = Matrix::from_fn(p - r, p, |i, j| d.u[(j, r + i)]);
-    Ok(left_null.matmul(a_w))
+/// `(S_c Z2_c, S_c N_c, S_c Z1_c)` of one contact's rows.
+fn block_rows(model: &GraspModel, ci: usize, faces: &Matrix) -> (Matrix, Matrix, Matrix) {
+    let off = model.offsets[ci];
+    let dim = model.contacts[ci].dim();
+    let (m, d) = (model.joints(), model.free_dim());
+    let r = faces.nrows();
+    let mul = |src: &Matrix, cols: usize| {
+        Matrix::from_fn(r, cols, |i, j| {
+            (0..dim).map(|k| faces[(i, k)] * src[(off + k, j)]).sum()
+        })
+    };
+    let hp = if d > 0 {
+        mul(&model.passive_basis, d)
+    } else {
+        Matrix::zeros(r, 0)
+    };
+    (mul(&model.z2, m), hp, mul(&model.z1, 6))
 }
 
 impl TorqueQp {
-    /// The contact-force-space QP of the usual two-step method, for comparison: minimise
-    /// `‖f‖²` subject to `G f = w`, the same linearised cones and minimum normal forces,
-    /// and the torque limits applied to `Jᵀ f`. Its "torque" is f itself (`z2 = I`,
-    /// `jacobian_transpose = I`); map the answer through Jᵀ to get joint torques.
-    pub fn force_space(p: &GraspProblem, opts: &ModelOptions) -> Result<Self, ModelError> {
-        if !(opts.rank_tolerance > 0.0 && opts.rank_tolerance < 1.0) {
-            return Err(ModelError::RankTolerance(opts.rank_tolerance));
+    /// The linear rows of `model` under `constraints` (one entry per contact).
+    pub fn new(model: Arc<GraspModel>, constraints: Constraints) -> Self {
+        let (m, d) = (model.joints(), model.free_dim());
+        let mut h_rows = Vec::new();
+        let mut hp_rows = Vec::new();
+        let mut hw_rows = Vec::new();
+        let mut c0 = Vec::new();
+        let mut rows = Vec::new();
+        let mut contacts = Vec::with_capacity(model.contacts.len());
+        for (ci, repr) in constraints.cones.iter().enumerate() {
+            let faces = contact_faces(&model, ci, repr);
+            let (h, hp, hw) = block_rows(&model, ci, &faces);
+            let r = faces.nrows();
+            contacts.push(ContactBlock {
+                model: model.contacts[ci],
+                offset: model.offsets[ci],
+                first_row: rows.len(),
+                rows: r,
+            });
+            for k in 0..r {
+                h_rows.push(h.row(k).to_vec());
+                hp_rows.push(hp.row(k).to_vec());
+                hw_rows.push(hw.row(k).to_vec());
+                if k + 1 == r {
+                    c0.push(model.min_normal_force[ci]);
+                    rows.push(RowId::NormalForce { contact: ci });
+                } else {
+                    c0.push(0.0);
+                    rows.push(RowId::Face {
+                        contact: ci,
+                        face: k,
+                    });
+                }
+            }
         }
-        let n = p.force_dim();
-        let cones = stack_cones(p);
-        let mut row_kinds = cones.row_kinds;
-        let mut c0 = cones.s0;
-        let limits = limit_rows(p, &p.jacobian_transpose, &mut c0, &mut row_kinds);
-        let h = cones.s.vstack(&limits);
-        let hw = Matrix::zeros(h.nrows(), 6);
-        let eq = p.grasp_matrix.clone();
-        let eq_w = Matrix::from_fn(6, 6, |i, j| if i == j { -1.0 } else { 0.0 });
-        let unreachable = unreachable_map(&eq, &eq_w, opts.rank_tolerance)?;
-        Ok(Self {
-            grasp_matrix: p.grasp_matrix.clone(),
-            jacobian_transpose: Matrix::identity(n),
-            z1: Matrix::zeros(n, 6),
-            z2: Matrix::identity(n),
-            rank: n,
-            contacts: cones.contacts,
-            s: cones.s,
-            h,
+        // Torque limits: τ_j ≥ −τmax and −τ_j ≥ −τmax.
+        for (j, lim) in model.torque_limits.iter().enumerate() {
+            if let Some(t) = *lim {
+                for upper in [false, true] {
+                    let mut row = vec![0.0; m];
+                    row[j] = if upper { -1.0 } else { 1.0 };
+                    h_rows.push(row);
+                    hp_rows.push(vec![0.0; d]);
+                    hw_rows.push(vec![0.0; 6]);
+                    c0.push(-t);
+                    rows.push(RowId::TorqueLimit { joint: j, upper });
+                }
+            }
+        }
+        Self {
+            h: Matrix::from_rows(&h_rows, m),
+            hp: Matrix::from_rows(&hp_rows, d),
+            hw: Matrix::from_rows(&hw_rows, 6),
             c0,
-            hw,
-            eq,
-            eq_w,
-            unreachable,
-            weights: vec![1.0; n],
-            row_kinds,
-            linearization: p.linearization,
-            equilibrium: Equilibrium::Consistent,
-            rank_tolerance: opts.rank_tolerance,
-        })
+            rows,
+            contacts,
+            constraints,
+            model,
+        }
     }
 
-    /// Assembles the QP of a validated problem.
-    pub fn new(p: &GraspProblem, opts: &ModelOptions) -> Result<Self, ModelError> {
-        if !(opts.rank_tolerance > 0.0 && opts.rank_tolerance < 1.0) {
-            return Err(ModelError::RankTolerance(opts.rank_tolerance));
-        }
-        let m = p.joints();
-        let a = p.grasp_matrix.vstack(&p.jacobian_transpose);
-        let dec = svd(&a)?;
-        let rank = dec.rank(opts.rank_tolerance);
-        let z = dec.pseudo_inverse(opts.rank_tolerance);
-        let z1 = z.columns(0, 6);
-        let z2 = z.columns(6, 6 + m);
+    /// The model of a validated problem, inscribed at the problem's linearisation.
+    pub fn from_problem(
+        p: &crate::problem::GraspProblem,
+        opts: &crate::model::ModelOptions,
+    ) -> Result<Self, ModelError> {
+        let model = Arc::new(GraspModel::new(p, opts)?);
+        Ok(Self::linearized(model, &p.linearization))
+    }
 
-        let cones = stack_cones(p);
-        let s = cones.s;
-        let mut row_kinds = cones.row_kinds;
-        let mut c0 = cones.s0;
-        // Torque limits: τ_j ≥ −τmax and −τ_j ≥ −τmax.
-        let limits = limit_rows(p, &Matrix::identity(m), &mut c0, &mut row_kinds);
-        let h = s.matmul(&z2).vstack(&limits);
-        let hw = s.matmul(&z1).vstack(&Matrix::zeros(limits.nrows(), 6));
+    /// Every contact inscribed at `lin`.
+    pub fn linearized(model: Arc<GraspModel>, lin: &Linearization) -> Self {
+        let c = Constraints::inscribed(&model, lin);
+        Self::new(model, c)
+    }
 
-        // Consistency: U⊥ = columns of U beyond the rank.
-        let (eq, eq_w, unreachable) = match opts.equilibrium {
-            Equilibrium::PaperModel => (
-                Matrix::zeros(0, m),
-                Matrix::zeros(0, 6),
-                Matrix::zeros(0, 6),
-            ),
-            Equilibrium::Consistent => {
-                let p_rows = 6 + m - rank;
-                let u_perp_t = Matrix::from_fn(p_rows, 6 + m, |i, j| dec.u[(j, rank + i)]);
-                let eq = u_perp_t.columns(6, 6 + m);
-                let eq_w = u_perp_t.columns(0, 6);
-                // Row combinations of C that vanish: their e-part must vanish too.
-                let unreachable = unreachable_map(&eq, &eq_w, opts.rank_tolerance)?;
-                (eq, eq_w, unreachable)
-            }
+    /// Every contact exact (the linear rows are then the minimum normal forces and the
+    /// torque limits).
+    pub fn exact(model: Arc<GraspModel>) -> Self {
+        let c = Constraints::exact(&model);
+        Self::new(model, c)
+    }
+
+    /// Replaces contact `ci`'s cone: only its block of rows is rebuilt, from the model's
+    /// Z (no new decomposition); the rows of other contacts keep their identities.
+    pub fn set_cone(&mut self, ci: usize, repr: ConeRepr) {
+        let faces = contact_faces(&self.model, ci, &repr);
+        let (h, hp, hw) = block_rows(&self.model, ci, &faces);
+        let old = self.contacts[ci];
+        let (start, end) = (old.first_row, old.first_row + old.rows);
+        let new_rows = faces.nrows();
+        let splice = |a: &Matrix, b: &Matrix| {
+            let mut v: Vec<Vec<f64>> = (0..start).map(|i| a.row(i).to_vec()).collect();
+            v.extend((0..b.nrows()).map(|i| b.row(i).to_vec()));
+            v.extend((end..a.nrows()).map(|i| a.row(i).to_vec()));
+            Matrix::from_rows(&v, a.ncols())
         };
-
-        Ok(Self {
-            grasp_matrix: p.grasp_matrix.clone(),
-            jacobian_transpose: p.jacobian_transpose.clone(),
-            z1,
-            z2,
-            rank,
-            contacts: cones.contacts,
-            s,
-            h,
-            c0,
-            hw,
-            eq,
-            eq_w,
-            unreachable,
-            weights: p.torque_weights.clone().unwrap_or_else(|| vec![1.0; m]),
-            row_kinds,
-            linearization: p.linearization,
-            equilibrium: opts.equilibrium,
-            rank_tolerance: opts.rank_tolerance,
-        })
+        self.h = splice(&self.h, &h);
+        self.hp = splice(&self.hp, &hp);
+        self.hw = splice(&self.hw, &hw);
+        let mut c0: Vec<f64> = vec![0.0; new_rows];
+        c0[new_rows - 1] = self.model.min_normal_force[ci];
+        self.c0.splice(start..end, c0);
+        let ids = (0..new_rows).map(|k| {
+            if k + 1 == new_rows {
+                RowId::NormalForce { contact: ci }
+            } else {
+                RowId::Face {
+                    contact: ci,
+                    face: k,
+                }
+            }
+        });
+        self.rows.splice(start..end, ids);
+        let shift = new_rows as isize - old.rows as isize;
+        self.contacts[ci].rows = new_rows;
+        for b in &mut self.contacts[ci + 1..] {
+            b.first_row = (b.first_row as isize + shift) as usize;
+        }
+        self.constraints.cones[ci] = repr;
     }
 
     /// Number of joints m.
@@ -327,17 +326,17 @@ impl TorqueQp {
 
     /// Number of contact force components n.
     pub fn force_dim(&self) -> usize {
-        self.z2.nrows()
+        self.model.force_dim()
     }
 
-    /// Number of inequality rows of H.
+    /// Number of linear inequality rows.
     pub fn inequality_rows(&self) -> usize {
         self.h.nrows()
     }
 
     /// Number of consistency equalities p.
     pub fn equality_rows(&self) -> usize {
-        self.eq.nrows()
+        self.model.equality_rows()
     }
 
     /// `c(w)` into `out` (length: inequality rows).
@@ -347,47 +346,147 @@ impl TorqueQp {
         }
     }
 
-    /// `e(w)` into `out` (length: equality rows).
-    pub fn e_into(&self, w: &[f64; 6], out: &mut [f64]) {
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = -dot(self.eq_w.row(i), w);
+    /// The linear rows of contact `ci` as faces on its force (`S_c`, fmin row last).
+    pub fn faces(&self, ci: usize) -> Matrix {
+        contact_faces(&self.model, ci, &self.constraints.cones[ci])
+    }
+
+    /// Row `k` of contact `ci` applied to its force `fc`: `(S_k · fc, Σ |S_kj fc_j|)`.
+    pub fn row_on_force(&self, ci: usize, k: usize, fc: &[f64]) -> (f64, f64) {
+        match &self.constraints.cones[ci] {
+            ConeRepr::Inscribed(cone) => {
+                let row = cone.faces.row(k);
+                let abs = row.iter().zip(fc).map(|(a, b)| (a * b).abs()).sum();
+                (dot(row, fc), abs)
+            }
+            ConeRepr::Exact => {
+                let fz = fc[self.model.contacts[ci].normal_index()];
+                (fz, fz.abs())
+            }
         }
     }
 
-    /// `f = Z1 w + Z2 τ` into `out` (eq. 31).
-    pub fn forces_into(&self, w: &[f64; 6], tau: &[f64], out: &mut [f64]) {
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = dot(self.z1.row(i), w) + dot(self.z2.row(i), tau);
+    /// The least-distance form in τ, for the native solver.
+    pub fn least_distance(&self) -> LeastDistance<'_> {
+        LeastDistance {
+            h: &self.h,
+            c0: &self.c0,
+            hw: &self.hw,
+            eq: &self.model.eq,
+            eq_w: &self.model.eq_w,
+            weights: &self.model.weights,
+            rows: &self.rows,
+        }
+    }
+}
+
+/// The contact-force-space QP of the usual two-step method, the baseline of Table 1:
+/// minimise `‖f‖²` subject to `G f = w`, the same inscribed cones and minimum normal
+/// forces, and the torque limits applied to `Jᵀ f`. Its variable is f.
+#[derive(Clone, Debug)]
+pub struct ForceSpaceQp {
+    /// The grasp.
+    pub model: Arc<GraspModel>,
+    /// Rows on f: cones, minimum normal forces, then limits on `Jᵀ f`.
+    pub h: Matrix,
+    /// Their right-hand sides (no wrench part).
+    pub c0: Vec<f64>,
+    hw: Matrix,
+    /// `G f = w` with independent rows: `eq f = −eq_w w`.
+    pub eq: Matrix,
+    eq_w: Matrix,
+    /// `unreachable · w ≠ 0`: no contact force balances w.
+    pub unreachable: Matrix,
+    weights: Vec<f64>,
+    /// Row identities.
+    pub rows: Vec<RowId>,
+}
+
+impl ForceSpaceQp {
+    /// The baseline problem of `model` with every contact inscribed at `lin`.
+    pub fn new(model: Arc<GraspModel>, lin: &Linearization) -> Result<Self, ModelError> {
+        let n = model.force_dim();
+        let mut h_rows = Vec::new();
+        let mut c0 = Vec::new();
+        let mut rows = Vec::new();
+        for (ci, c) in model.contacts.iter().enumerate() {
+            let faces = inscribed_cone(c, lin).faces;
+            let off = model.offsets[ci];
+            for k in 0..faces.nrows() {
+                let mut row = vec![0.0; n];
+                row[off..off + c.dim()].copy_from_slice(faces.row(k));
+                h_rows.push(row);
+                if k + 1 == faces.nrows() {
+                    c0.push(model.min_normal_force[ci]);
+                    rows.push(RowId::NormalForce { contact: ci });
+                } else {
+                    c0.push(0.0);
+                    rows.push(RowId::Face {
+                        contact: ci,
+                        face: k,
+                    });
+                }
+            }
+        }
+        for (j, lim) in model.torque_limits.iter().enumerate() {
+            if let Some(t) = *lim {
+                for upper in [false, true] {
+                    let sign = if upper { -1.0 } else { 1.0 };
+                    h_rows.push(
+                        model
+                            .jacobian_transpose
+                            .row(j)
+                            .iter()
+                            .map(|v| sign * v)
+                            .collect(),
+                    );
+                    c0.push(-t);
+                    rows.push(RowId::TorqueLimit { joint: j, upper });
+                }
+            }
+        }
+        // G f = w with independent rows: Vᵣᵀ f = Σᵣ⁻¹ Uᵣᵀ w.
+        let g = &model.grasp_matrix;
+        let d = svd(g).map_err(|_| ModelError::Decomposition {
+            what: "G",
+            rows: 6,
+            cols: n,
+        })?;
+        let r = d.rank(model.rank_tolerance);
+        let eq = Matrix::from_fn(r, n, |i, j| d.v[(j, i)]);
+        let eq_w = Matrix::from_fn(r, 6, |i, j| -d.u[(j, i)] / d.s[i]);
+        let unreachable = Matrix::from_fn(6 - r, 6, |i, j| d.u[(j, r + i)]);
+        let h = Matrix::from_rows(&h_rows, n);
+        Ok(Self {
+            hw: Matrix::zeros(h.nrows(), 6),
+            h,
+            c0,
+            eq,
+            eq_w,
+            unreachable,
+            weights: vec![1.0; n],
+            rows,
+            model,
+        })
+    }
+
+    /// The least-distance form in f, for the native solver.
+    pub fn least_distance(&self) -> LeastDistance<'_> {
+        LeastDistance {
+            h: &self.h,
+            c0: &self.c0,
+            hw: &self.hw,
+            eq: &self.eq,
+            eq_w: &self.eq_w,
+            weights: &self.weights,
+            rows: &self.rows,
         }
     }
 
-    /// `‖U⊥ᵀ-left-null · w‖∞`: how far `w` is from any wrench some torque can balance
-    /// under `C τ = e` (0 in the paper model).
+    /// `‖unreachable · w‖∞`: the part of w no contact force can balance.
     pub fn unreachable_residual(&self, w: &[f64; 6]) -> f64 {
         (0..self.unreachable.nrows())
             .map(|i| dot(self.unreachable.row(i), w).abs())
             .fold(0.0, f64::max)
-    }
-
-    /// Tolerance on [`Self::unreachable_residual`]: a wrench within it is treated as
-    /// reachable. It follows from the rank decision: rows of C below
-    /// `rank_tolerance · σ_max` were treated as zero, so `e` may be off by as much,
-    /// relative to `‖w‖∞`.
-    pub fn unreachable_tolerance(&self, w: &[f64; 6]) -> f64 {
-        10.0 * self.rank_tolerance * crate::matrix::norm_inf(w).max(f64::EPSILON)
-    }
-
-    /// Human-readable description of row `i` of H.
-    pub fn describe_row(&self, i: usize) -> String {
-        match self.row_kinds[i] {
-            RowKind::Face { contact, face } => format!("contact {contact} face {face}"),
-            RowKind::NormalForce { contact } => format!("contact {contact} normal force"),
-            RowKind::TorqueLimit { joint, upper } => {
-                format!(
-                    "joint {joint} {} torque limit",
-                    if upper { "upper" } else { "lower" }
-                )
-            }
-        }
     }
 }

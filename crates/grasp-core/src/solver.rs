@@ -1,33 +1,51 @@
 //! The backend trait and what every backend returns.
+//!
+//! The core completes every answer the same way, whichever backend produced it: the
+//! contact forces, σ, the residuals and the cone margins, and a final check. An answer
+//! a backend calls optimal whose residuals exceed the backend's stated accuracy,
+//! relative to the problem's own scale, is reported as a numerical failure instead.
 
 use crate::matrix::{dot, norm_inf};
-use crate::qp::{Equilibrium, TorqueQp};
+use crate::model::Equilibrium;
+use crate::qp::{ConeRepr, RowId, TorqueQp};
+use serde::{Serialize, Serializer};
 use std::fmt;
 use std::time::{Duration, Instant};
 
 /// How a solve finished ("ran and finished"; bad input is an `Err` instead).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum Status {
-    /// An optimal torque was found.
+    /// An optimal torque was found, and it passed the residual checks.
     Optimal,
+    /// The backend reached only reduced accuracy (Clarabel's "almost solved"); the
+    /// answer still passed the residual checks.
+    AlmostOptimal,
     /// No torque satisfies the constraints; [`Solution::reason`] says why.
     Infeasible,
     /// The iteration cap was reached before optimality.
     IterationLimit,
-    /// The backend could not make progress reliably.
+    /// The backend could not make progress reliably, or its answer failed the checks.
     #[default]
     NumericalFailure,
 }
 
 impl Status {
-    /// `optimal`, `infeasible`, `iteration_limit` or `numerical_failure`.
+    /// `optimal`, `almost_optimal`, `infeasible`, `iteration_limit` or `numerical_failure`.
     pub fn as_str(&self) -> &'static str {
         match self {
             Status::Optimal => "optimal",
+            Status::AlmostOptimal => "almost_optimal",
             Status::Infeasible => "infeasible",
             Status::IterationLimit => "iteration_limit",
             Status::NumericalFailure => "numerical_failure",
         }
+    }
+
+    /// Optimal, at full or reduced accuracy: the torque is an answer.
+    pub fn has_answer(&self) -> bool {
+        matches!(self, Status::Optimal | Status::AlmostOptimal)
     }
 }
 
@@ -38,33 +56,49 @@ impl fmt::Display for Status {
 }
 
 /// Why a solve did not end optimal.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum Reason {
     /// No torque can make `[w; τ]` consistent: part of the wrench is outside what any
     /// contact force produced by the joints can balance.
     UnreachableWrench {
-        /// `‖unreachable · w‖∞`, in wrench units.
+        /// `‖unreachable · w‖∞`, in equilibrated wrench units.
         residual: f64,
     },
     /// A constraint row that no torque affects is violated by the wrench alone.
     FixedRowViolated {
-        /// Row of H.
-        row: usize,
-        /// What the row stands for.
-        description: String,
+        /// The row.
+        row: RowId,
         /// By how much (force units for cone rows).
         violation: f64,
     },
-    /// The linearised cones, the consistency equalities and the options admit no torque.
+    /// The cones, the consistency equalities and the options admit no torque.
     NoAdmissibleTorque {
         /// With an elastic start: the smallest uniform relaxation of the normalised rows
         /// that the solver found would make the problem feasible.
         relaxation: Option<f64>,
-        /// The rows that block, with their descriptions.
-        blocking: Vec<String>,
+        /// The rows that block.
+        blocking: Vec<RowId>,
+    },
+    /// The backend's answer failed the core's residual check.
+    ResidualCheck {
+        /// `‖G f − w‖∞`.
+        wrench_residual: f64,
+        /// `‖Jᵀ f − τ‖∞`.
+        torque_residual: f64,
+        /// Largest violation of a linear row or an exact cone (force or torque units).
+        violation: f64,
+        /// The relative tolerance that applied.
+        tolerance: f64,
     },
     /// Backend-specific explanation.
-    Backend(String),
+    Backend {
+        /// The backend's name.
+        backend: &'static str,
+        /// What it said.
+        message: String,
+    },
 }
 
 impl fmt::Display for Reason {
@@ -74,24 +108,29 @@ impl fmt::Display for Reason {
                 f,
                 "the wrench has a component ({residual:.3e}) that no joint torque can balance: [w; τ] cannot lie in the range of [G; Jᵀ]"
             ),
-            Reason::FixedRowViolated { row, description, violation } => write!(
+            Reason::FixedRowViolated { row, violation } => write!(
                 f,
-                "row {row} ({description}) is not affected by any joint torque and the wrench violates it by {violation:.3e}"
+                "row {row} is not affected by any joint torque and the wrench violates it by {violation:.3e}"
             ),
             Reason::NoAdmissibleTorque { relaxation, blocking } => {
-                write!(f, "no joint torque keeps every contact force inside its linearised cone while balancing the wrench (")?;
+                write!(f, "no joint torque keeps every contact force inside its cone while balancing the wrench (")?;
                 if let Some(r) = relaxation {
                     write!(f, "the rows would need relaxing by {r:.3e}; ")?;
                 }
-                write!(f, "conflicting rows: {})", blocking.join(", "))
+                let names: Vec<String> = blocking.iter().map(RowId::to_string).collect();
+                write!(f, "conflicting rows: {})", names.join(", "))
             }
-            Reason::Backend(s) => f.write_str(s),
+            Reason::ResidualCheck { wrench_residual, torque_residual, violation, tolerance } => write!(
+                f,
+                "the backend's answer failed the residual check at relative tolerance {tolerance:.1e}: ‖G f − w‖∞ = {wrench_residual:.3e}, ‖Jᵀ f − τ‖∞ = {torque_residual:.3e}, largest constraint violation {violation:.3e}"
+            ),
+            Reason::Backend { backend, message } => write!(f, "{backend}: {message}"),
         }
     }
 }
 
 /// Physical consistency checks, computed by the core so every backend reports alike.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Diagnostics {
     /// `‖G f − w‖∞`: does the answer hold the object?
     pub wrench_residual: f64,
@@ -99,35 +138,75 @@ pub struct Diagnostics {
     pub torque_residual: f64,
     /// `‖C τ − e‖∞` (0 in the paper model).
     pub consistency_residual: f64,
-    /// Largest violation `max(c_i − H_i τ, 0)` of the linearised rows (force units for
-    /// cone rows, torque units for limit rows).
+    /// Largest violation `max(c_i − H_i τ, 0)` of the linear rows: inscribed faces,
+    /// minimum normal forces (force units) and torque limits (torque units).
     pub max_violation: f64,
+    /// Largest violation `max(g(f) − fz, 0)` of an exact cone (force units; 0 when no
+    /// contact uses its exact cone).
+    pub cone_violation: f64,
     /// Per contact, the scale-free margin to its exact cone (see
-    /// [`crate::ContactModel::exact_margin`]): 1 pure normal push, 0 on the cone, < 0 outside.
-    pub friction_margins: Vec<f64>,
+    /// [`crate::ContactModel::exact_margin`]): 1 pure normal push, 0 on the cone, < 0
+    /// outside. `None` for an unloaded contact, whose force is at rounding level.
+    pub friction_margins: Vec<Option<f64>>,
+    /// The relative tolerance of the final residual check.
+    pub check_tolerance: f64,
+}
+
+/// `v > limit`, or not a number.
+fn exceeds(v: f64, limit: f64) -> bool {
+    !matches!(
+        v.partial_cmp(&limit),
+        Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+    )
+}
+
+fn reason_with_message<S: Serializer>(r: &Option<Reason>, s: S) -> Result<S::Ok, S::Error> {
+    #[derive(Serialize)]
+    struct WithMessage<'a> {
+        message: String,
+        #[serde(flatten)]
+        detail: &'a Reason,
+    }
+    match r {
+        None => s.serialize_none(),
+        Some(detail) => WithMessage {
+            message: detail.to_string(),
+            detail,
+        }
+        .serialize(s),
+    }
+}
+
+fn micros<S: Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_f64(d.as_secs_f64() * 1e6)
 }
 
 /// The answer of one solve.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct Solution {
     /// How the solve finished.
     pub status: Status,
-    /// Why it is not optimal, when it is not.
+    /// Why it is not optimal, when it is not (in JSON: `message` and the details).
+    #[serde(serialize_with = "reason_with_message")]
     pub reason: Option<Reason>,
-    /// τ, one per joint (empty unless the status is optimal, or an iteration limit with
-    /// a feasible iterate).
+    /// τ, one per joint (empty unless the status has an answer, or an iteration limit
+    /// with a feasible iterate).
     pub torque: Vec<f64>,
-    /// `f = Z1 w + Z2 τ`, in contact order (empty when `torque` is).
+    /// The passive internal forces ξ chosen (empty unless they are free).
+    pub internal_forces: Vec<f64>,
+    /// `f = Z1 w + Z2 τ + N ξ`, in contact order (empty when `torque` is).
     pub contact_forces: Vec<f64>,
-    /// `σ = Σ w_j τ_j²` (eq. 40; NaN-free: 0 when there is no torque).
+    /// `σ = Σ w_j τ_j²` (eq. 40; 0 when there is no torque).
     pub objective: f64,
     /// Iterations of the backend.
     pub iterations: usize,
-    /// The final key constraint set: rows of H active at τ, when the backend has one.
+    /// The final key constraint set: linear rows active at τ, when the backend has one
+    /// (indices into the rows of [`TorqueQp`]).
     pub active_set: Option<Vec<usize>>,
-    /// Lagrange multipliers of the rows of H for `Σ w_j τ_j²` (empty if not reported).
+    /// Lagrange multipliers of the linear rows for `Σ w_j τ_j²` (empty if not reported).
     pub multipliers: Vec<f64>,
-    /// Wall-clock time of the solve, model already built.
+    /// Wall-clock time of the solve, model already built (µs in JSON).
+    #[serde(rename = "solve_time_us", serialize_with = "micros")]
     pub solve_time: Duration,
     /// Residuals and margins.
     pub diagnostics: Diagnostics,
@@ -136,9 +215,9 @@ pub struct Solution {
 }
 
 impl Solution {
-    /// Whether the status is optimal.
+    /// Whether the status is optimal (at full or reduced accuracy).
     pub fn is_optimal(&self) -> bool {
-        self.status == Status::Optimal
+        self.status.has_answer()
     }
 }
 
@@ -147,7 +226,7 @@ impl Solution {
 pub struct WarmStart<'a> {
     /// An initial torque (used when feasible, otherwise as a starting guess).
     pub torque: Option<&'a [f64]>,
-    /// An initial key constraint set (rows of H), such as a previous answer's.
+    /// An initial key constraint set (linear rows), such as a previous answer's.
     pub active_set: Option<&'a [usize]>,
 }
 
@@ -158,6 +237,11 @@ impl<'a> WarmStart<'a> {
             torque: (!s.torque.is_empty()).then_some(s.torque.as_slice()),
             active_set: s.active_set.as_deref(),
         }
+    }
+
+    /// Whether this starts from anything.
+    pub fn is_cold(&self) -> bool {
+        self.torque.is_none() && self.active_set.is_none()
     }
 }
 
@@ -184,7 +268,7 @@ pub enum WarmStartError {
     ActiveSetRow {
         /// The index given.
         row: usize,
-        /// Rows of H.
+        /// Linear rows.
         rows: usize,
     },
     /// A wrench that is not finite.
@@ -195,24 +279,43 @@ pub enum WarmStartError {
     },
 }
 
+/// What a backend can do, so that the facade chooses without knowing backends.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct Capabilities {
+    /// Solves exact (second-order) cones.
+    pub exact_cones: bool,
+    /// Optimises free passive internal forces.
+    pub free_internal_forces: bool,
+    /// Warm-starts from a key constraint set.
+    pub warm_key_set: bool,
+    /// Warm-starts from a torque.
+    pub warm_torque: bool,
+}
+
 /// A QP backend. Built once per grasp (it may factor and cache what depends only on
 /// the grasp), then solved for any number of wrenches without allocating.
-pub trait TorqueSolver {
+pub trait TorqueSolver: Send {
     /// The backend's name, as used on the command line.
     fn name(&self) -> &'static str;
+
+    /// What this backend supports.
+    fn capabilities(&self) -> Capabilities;
+
+    /// The backend's accuracy: the relative tolerance of the core's final residual check.
+    fn residual_tolerance(&self) -> f64;
 
     /// The problem this solver was built for.
     fn problem(&self) -> &TorqueQp;
 
-    /// Solves for `wrench`: sets `status`, `reason`, `torque`, `iterations`,
-    /// `active_set` and `multipliers` of `out`, reusing its buffers. Inputs have been
-    /// checked by [`solve_into`], which also fills the rest.
+    /// Solves for `wrench`: sets `status`, `reason`, `torque`, `internal_forces`,
+    /// `iterations`, `active_set` and `multipliers` of `out`, reusing its buffers.
+    /// Inputs have been checked by [`solve_into`], which also fills the rest.
     fn solve_raw(&mut self, wrench: &[f64; 6], warm: &WarmStart<'_>, out: &mut Solution);
 }
 
 /// Solves with any backend and completes the answer with forces, objective and
-/// diagnostics. Reuses `out`'s buffers: no allocation once they have grown to size
-/// (warnings aside).
+/// diagnostics, then checks it. Reuses `out`'s buffers: no allocation once they have
+/// grown to size (warnings aside).
 pub fn solve_into(
     solver: &mut dyn TorqueSolver,
     wrench: &[f64; 6],
@@ -225,8 +328,9 @@ pub fn solve_into(
     out.warnings.clear();
     out.reason = None;
     out.multipliers.clear();
-    let residual = qp.unreachable_residual(wrench);
-    if residual > qp.unreachable_tolerance(wrench) {
+    out.internal_forces.clear();
+    let residual = qp.model.unreachable_residual(wrench);
+    if residual > qp.model.unreachable_tolerance(wrench) {
         out.status = Status::Infeasible;
         out.reason = Some(Reason::UnreachableWrench { residual });
         out.torque.clear();
@@ -236,7 +340,9 @@ pub fn solve_into(
         solver.solve_raw(wrench, warm, out);
     }
     out.solve_time = start.elapsed();
-    solver.problem().complete(wrench, out);
+    let tol = solver.residual_tolerance();
+    let name = solver.name();
+    solver.problem().complete(wrench, tol, name, out);
     Ok(())
 }
 
@@ -276,11 +382,17 @@ fn check_inputs(qp: &TorqueQp, w: &[f64; 6], warm: &WarmStart<'_>) -> Result<(),
 }
 
 impl TorqueQp {
-    /// Fills forces, objective and diagnostics of `out` from its torque.
-    pub fn complete(&self, w: &[f64; 6], out: &mut Solution) {
-        let n = self.force_dim();
+    /// Fills forces, objective and diagnostics of `out` from its torque, and turns an
+    /// answer that fails the residual check at relative tolerance `tol` into a
+    /// numerical failure.
+    pub fn complete(&self, w: &[f64; 6], tol: f64, backend: &'static str, out: &mut Solution) {
+        let model = &*self.model;
+        let n = model.force_dim();
         let d = &mut out.diagnostics;
         d.friction_margins.clear();
+        // An accepted wrench may be off the reachable set by the rank decision.
+        let tol = tol.max(10.0 * model.rank_tolerance);
+        d.check_tolerance = tol;
         if out.torque.is_empty() {
             out.contact_forces.clear();
             out.objective = 0.0;
@@ -288,50 +400,103 @@ impl TorqueQp {
             d.torque_residual = 0.0;
             d.consistency_residual = 0.0;
             d.max_violation = 0.0;
+            d.cone_violation = 0.0;
             return;
         }
         let tau = &out.torque;
         out.contact_forces.resize(n, 0.0);
-        self.forces_into(w, tau, &mut out.contact_forces);
+        model.forces_into(w, tau, &out.internal_forces, &mut out.contact_forces);
         let f = &out.contact_forces;
         out.objective = tau
             .iter()
-            .zip(&self.weights)
+            .zip(&model.weights)
             .map(|(t, wj)| wj * t * t)
             .sum();
-        d.wrench_residual = (0..6)
-            .map(|i| (dot(self.grasp_matrix.row(i), f) - w[i]).abs())
+        // Backward-error scales: a residual is judged against the size of the terms
+        // that make it up, so the check is the same in any units.
+        // Plus a floor: the size of [w; τ] in equilibrated units, which bounds the
+        // rounding of f = Z [w; τ].
+        let floor = tau
+            .iter()
+            .zip(&model.torque_scale)
+            .map(|(t, r)| (t * r).abs())
+            .fold(norm_inf(&model.scaled_wrench(w)), f64::max);
+        let (mut wres, mut wbad) = (0.0f64, false);
+        for i in 0..6 {
+            let row = model.grasp_matrix.row(i);
+            let r = (dot(row, f) - w[i]).abs();
+            let scale = row.iter().zip(f).map(|(a, b)| (a * b).abs()).sum::<f64>()
+                + w[i].abs()
+                + floor / model.wrench_scale[i];
+            wres = wres.max(r);
+            wbad |= exceeds(r, tol * scale);
+        }
+        let (mut tres, mut tbad) = (0.0f64, false);
+        for (j, t) in tau.iter().enumerate() {
+            let row = model.jacobian_transpose.row(j);
+            let r = (dot(row, f) - t).abs();
+            let scale = row.iter().zip(f).map(|(a, b)| (a * b).abs()).sum::<f64>()
+                + t.abs()
+                + floor / model.torque_scale[j];
+            tres = tres.max(r);
+            tbad |= exceeds(r, tol * scale);
+        }
+        d.wrench_residual = wres;
+        d.torque_residual = tres;
+        d.consistency_residual = (0..model.equality_rows())
+            .map(|i| (dot(model.eq.row(i), tau) + dot(model.eq_w.row(i), w)).abs())
             .fold(0.0, f64::max);
-        d.torque_residual = (0..self.joints())
-            .map(|j| (dot(self.jacobian_transpose.row(j), f) - tau[j]).abs())
+        // Force scale: the largest contact force, with mz measured as mz/mu_torsion.
+        let fscale = self
+            .contacts
+            .iter()
+            .map(|c| {
+                let fc = &f[c.offset..c.offset + c.model.dim()];
+                c.model.normal_gauge_scale(fc)
+            })
             .fold(0.0, f64::max);
-        d.consistency_residual = (0..self.equality_rows())
-            .map(|i| (dot(self.eq.row(i), tau) + dot(self.eq_w.row(i), w)).abs())
-            .fold(0.0, f64::max);
-        // c − H τ = s0 − S f on cone rows (S is block-diagonal: a few flops per row),
-        // and the limit rows read τ directly.
-        d.max_violation = 0.0;
+        // c − H τ = fmin − S f on contact rows (S is block-diagonal: a few flops per
+        // row), and the limit rows read τ directly.
+        let (mut viol, mut vbad) = (0.0f64, false);
+        for (ci, c) in self.contacts.iter().enumerate() {
+            let fc = &f[c.offset..c.offset + c.model.dim()];
+            for k in 0..c.rows {
+                let i = c.first_row + k;
+                let (sf, abs) = self.row_on_force(ci, k, fc);
+                let v = self.c0[i] - sf;
+                let scale = abs + self.c0[i].abs() + fscale;
+                viol = viol.max(v);
+                vbad |= exceeds(v, tol * scale);
+            }
+        }
+        for (i, id) in self.rows.iter().enumerate() {
+            if let RowId::TorqueLimit { joint, .. } = *id {
+                let v = self.c0[i] - dot(self.h.row(i), tau);
+                viol = viol.max(v);
+                vbad |= exceeds(v, tol * (self.c0[i].abs() + tau[joint].abs()));
+            }
+        }
+        d.max_violation = viol.max(0.0);
+        let mut cone = 0.0f64;
+        for (c, repr) in self.contacts.iter().zip(&self.constraints.cones) {
+            if let ConeRepr::Exact = repr {
+                let fc = &f[c.offset..c.offset + c.model.dim()];
+                let v = c.model.gauge(fc) - fc[c.model.normal_index()];
+                cone = cone.max(v);
+                vbad |= exceeds(v, tol * fscale.max(f64::MIN_POSITIVE) * 10.0);
+            }
+        }
+        d.cone_violation = cone.max(0.0);
+        // A contact whose force is rounding noise next to the largest has no margin.
+        let zero = 1e3 * f64::EPSILON * (n as f64) * fscale;
         for c in &self.contacts {
             let fc = &f[c.offset..c.offset + c.model.dim()];
-            for i in c.first_row..c.first_row + c.rows {
-                let v = self.c0[i] - dot(&self.s.row(i)[c.offset..c.offset + c.model.dim()], fc);
-                d.max_violation = d.max_violation.max(v);
-            }
+            let size = c.model.normal_gauge_scale(fc);
+            d.friction_margins
+                .push((size > zero).then(|| c.model.exact_margin(fc, 0.0)));
         }
-        for (i, kind) in self.row_kinds.iter().enumerate() {
-            if let crate::qp::RowKind::TorqueLimit { .. } = *kind {
-                let v = self.c0[i] - dot(self.h.row(i), tau);
-                d.max_violation = d.max_violation.max(v);
-            }
-        }
-        let zero = 1e-12 * norm_inf(f);
-        for c in &self.contacts {
-            d.friction_margins.push(
-                c.model
-                    .exact_margin(&f[c.offset..c.offset + c.model.dim()], zero),
-            );
-        }
-        if self.equilibrium == Equilibrium::PaperModel {
+        let paper = model.equilibrium == Equilibrium::PaperModel;
+        if paper {
             let scale = norm_inf(w).max(norm_inf(f)).max(1.0);
             if d.wrench_residual > 1e-9 * scale {
                 out.warnings.push(format!(
@@ -339,6 +504,23 @@ impl TorqueQp {
                     d.wrench_residual
                 ));
             }
+        }
+        let finite = out.objective.is_finite()
+            && f.iter().all(|v| v.is_finite())
+            && tau.iter().all(|v| v.is_finite());
+        // The paper model balances neither the wrench nor the torques (it warns instead).
+        let failed = !finite || (!paper && (wbad || tbad)) || vbad;
+        if out.status.has_answer() && failed {
+            out.status = Status::NumericalFailure;
+            out.reason = Some(Reason::ResidualCheck {
+                wrench_residual: d.wrench_residual,
+                torque_residual: d.torque_residual,
+                violation: d.max_violation.max(d.cone_violation),
+                tolerance: tol,
+            });
+            out.warnings.push(format!(
+                "{backend} called this answer optimal, but it failed the residual check"
+            ));
         }
     }
 }

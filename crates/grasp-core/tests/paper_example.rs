@@ -1,7 +1,8 @@
 //! The paper's section 5 example: Z1, Z2 (eq. 49), H (eq. 52), the starting point τ1
 //! with I1 = (2, 14), and what the printed c vector gets wrong.
 
-use grasp_core::{load_problem, Equilibrium, ModelOptions, TorqueQp};
+use grasp_core::{Equilibrium, ModelOptions, TorqueQp};
+use grasp_io::load_problem;
 
 fn qp(eq: Equilibrium) -> (TorqueQp, [f64; 6]) {
     let p = load_problem(concat!(
@@ -9,7 +10,7 @@ fn qp(eq: Equilibrium) -> (TorqueQp, [f64; 6]) {
         "/../../fixtures/paper-example.json"
     ))
     .unwrap();
-    let qp = TorqueQp::new(
+    let qp = TorqueQp::from_problem(
         &p,
         &ModelOptions {
             equilibrium: eq,
@@ -51,16 +52,16 @@ fn z1_and_z2_match_eq_49() {
     for i in 0..8 {
         for j in 0..6 {
             assert!(
-                (qp.z1[(i, j)] - z1[i][j]).abs() <= PRINTED,
+                (qp.model.z1[(i, j)] - z1[i][j]).abs() <= PRINTED,
                 "Z1[{i}][{j}] = {}",
-                qp.z1[(i, j)]
+                qp.model.z1[(i, j)]
             );
         }
         for j in 0..4 {
             assert!(
-                (qp.z2[(i, j)] - z2[i][j]).abs() <= PRINTED,
+                (qp.model.z2[(i, j)] - z2[i][j]).abs() <= PRINTED,
                 "Z2[{i}][{j}] = {}",
-                qp.z2[(i, j)]
+                qp.model.z2[(i, j)]
             );
         }
     }
@@ -69,12 +70,12 @@ fn z1_and_z2_match_eq_49() {
 #[test]
 fn z_is_a_generalised_inverse_of_a() {
     let (qp, _) = qp(Equilibrium::Consistent);
-    let a = qp.grasp_matrix.vstack(&qp.jacobian_transpose);
+    let a = qp.model.grasp_matrix.vstack(&qp.model.jacobian_transpose);
     let z = grasp_core::Matrix::from_fn(8, 10, |i, j| {
         if j < 6 {
-            qp.z1[(i, j)]
+            qp.model.z1[(i, j)]
         } else {
-            qp.z2[(i, j - 6)]
+            qp.model.z2[(i, j - 6)]
         }
     });
     let aza = a.matmul(&z).matmul(&a);

@@ -7,7 +7,22 @@
 //! `osqp` feature is opt-in.
 
 use grasp_core::matrix::dot;
-use grasp_core::{Reason, Solution, Status, TorqueQp, TorqueSolver, WarmStart};
+use grasp_core::{Capabilities, Reason, Solution, Status, TorqueQp, TorqueSolver, WarmStart};
+
+/// What the OSQP backend supports.
+pub const CAPABILITIES: Capabilities = Capabilities {
+    exact_cones: false,
+    free_internal_forces: false,
+    warm_key_set: false,
+    warm_torque: true,
+};
+
+fn backend(message: &str) -> Option<Reason> {
+    Some(Reason::Backend {
+        backend: "osqp",
+        message: message.into(),
+    })
+}
 use osqp::{CscMatrix, PolishStatus, Problem, Settings};
 
 /// OSQP's infinity: a larger bound makes OSQP treat the row as two-sided.
@@ -80,7 +95,13 @@ impl OsqpSolver {
             m,
             (0..m)
                 .flat_map(|j| (0..m).map(move |i| (i, j)))
-                .map(|(i, j)| if i == j { 2.0 * qp.weights[i] } else { 0.0 }),
+                .map(|(i, j)| {
+                    if i == j {
+                        2.0 * qp.model.weights[i]
+                    } else {
+                        0.0
+                    }
+                }),
         )
         .into_upper_tri();
         let a = CscMatrix::from_row_iter_dense(
@@ -88,7 +109,7 @@ impl OsqpSolver {
             m,
             (0..rows).flat_map(|i| {
                 let row = if i < p_eq {
-                    qp.eq.row(i)
+                    qp.model.eq.row(i)
                 } else {
                     qp.h.row(i - p_eq)
                 };
@@ -130,6 +151,20 @@ impl TorqueSolver for OsqpSolver {
         "osqp"
     }
 
+    fn capabilities(&self) -> Capabilities {
+        CAPABILITIES
+    }
+
+    fn residual_tolerance(&self) -> f64 {
+        // ADMM's feasibility is ε-relative to its own data; polishing makes it exact on
+        // the active set.
+        if self.polished {
+            1e-6
+        } else {
+            1e-4
+        }
+    }
+
     fn problem(&self) -> &TorqueQp {
         &self.qp
     }
@@ -138,7 +173,7 @@ impl TorqueSolver for OsqpSolver {
         let qp = &self.qp;
         let p_eq = qp.equality_rows();
         for i in 0..p_eq {
-            let e = -dot(qp.eq_w.row(i), w);
+            let e = -dot(qp.model.eq_w.row(i), w);
             self.lower[i] = e;
             self.upper[i] = e;
         }
@@ -162,17 +197,15 @@ impl TorqueSolver for OsqpSolver {
             }
             osqp::Status::PrimalInfeasible(_) | osqp::Status::PrimalInfeasibleInaccurate(_) => (
                 Status::Infeasible,
-                Some(Reason::Backend(
-                    "OSQP found a certificate of primal infeasibility: no torque keeps every contact force inside its linearised cone while balancing the wrench".into(),
-                )),
+                backend("a certificate of primal infeasibility: no torque keeps every contact force inside its linearised cone while balancing the wrench"),
                 None,
             ),
             osqp::Status::MaxIterationsReached(_) | osqp::Status::TimeLimitReached(_) => (
                 Status::IterationLimit,
-                Some(Reason::Backend("OSQP reached its iteration limit".into())),
+                backend("reached its iteration limit"),
                 None,
             ),
-            _ => (Status::NumericalFailure, Some(Reason::Backend("OSQP failed".into())), None),
+            _ => (Status::NumericalFailure, backend("failed"), None),
         };
         out.status = st;
         out.reason = reason;

@@ -1,8 +1,8 @@
 //! Geometry-form grasps build the same G and Jᵀ as the reference implementation.
 
-use grasp_core::file::MatrixFile;
-use grasp_core::geometry::GeometryFile;
-use grasp_core::parse_problem;
+use grasp_io::file::MatrixFile;
+use grasp_io::geometry::GeometryFile;
+use grasp_io::parse_problem;
 
 fn cases() -> Vec<serde_json::Value> {
     let path = concat!(

@@ -1,9 +1,10 @@
-#![doc = include_str!("../README.md")]
+#![doc = include_str!("../../../README.md")]
 
 pub use grasp_core::*;
+pub use grasp_io::{file, geometry, load_problem, parse_problem};
 
 #[cfg(feature = "active-set")]
-pub use grasp_active_set::{ActiveSetSettings, ActiveSetSolver, Phase1};
+pub use grasp_active_set::{ActiveSetSettings, ActiveSetSolver, ForceSpaceSolver, Phase1};
 #[cfg(feature = "clarabel")]
 pub use grasp_clarabel::{ClarabelSettings, ClarabelSolver};
 #[cfg(feature = "osqp")]
@@ -12,6 +13,8 @@ pub use grasp_osqp::{OsqpSettings, OsqpSolver};
 mod backend;
 pub use backend::{Backend, BackendError, Cones, SolverConfig};
 pub mod sweep;
+
+use std::sync::Arc;
 
 /// Anything that stops a problem from being set up.
 #[derive(Debug, thiserror::Error)]
@@ -43,10 +46,24 @@ pub struct GraspSolver {
 }
 
 impl GraspSolver {
-    /// Validates the problem, assembles its QP and builds the configured backend.
+    /// Validates the problem, builds its model and the configured view, and the backend.
     pub fn new(problem: &GraspProblem, config: &SolverConfig) -> Result<Self, Error> {
         problem.validate()?;
-        let qp = TorqueQp::new(problem, &config.model)?;
+        let model = Arc::new(GraspModel::new(problem, &config.model)?);
+        Self::from_model(model, &problem.linearization, config)
+    }
+
+    /// A solver on an already built model (shared, for example, by the threads of a
+    /// batch or by the rows of a sweep): only the view and the backend are built.
+    pub fn from_model(
+        model: Arc<GraspModel>,
+        linearization: &Linearization,
+        config: &SolverConfig,
+    ) -> Result<Self, Error> {
+        linearization
+            .validate()
+            .map_err(|e| ProblemError::invalid("linearization", "valid N and K", e))?;
+        let qp = config.view(model, linearization);
         Ok(Self::from_backend(config.build(qp)?))
     }
 
@@ -61,7 +78,7 @@ impl GraspSolver {
         }
     }
 
-    /// The assembled QP.
+    /// The view the backend solves (its model is [`TorqueQp::model`]).
     pub fn problem(&self) -> &TorqueQp {
         self.backend.problem()
     }

@@ -11,7 +11,7 @@ use grasp_torque::{
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../.."),
         "/tests/data/reference-cases.json"
     );
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path)?)?;
@@ -22,7 +22,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut p = file.into_problem()?;
             for n in [4, 8, 16] {
                 p.linearization.sides = n;
-                let qp = TorqueQp::new(&p, &ModelOptions::default())?;
+                let qp = TorqueQp::from_problem(&p, &ModelOptions::default())?;
                 let mut s = ActiveSetSolver::new(
                     qp,
                     ActiveSetSettings {

@@ -48,7 +48,7 @@ fn native_solves_reuse_the_workspace() {
     ] {
         let p = load_problem(format!(
             "{}/fixtures/{name}.json",
-            env!("CARGO_MANIFEST_DIR")
+            concat!(env!("CARGO_MANIFEST_DIR"), "/../..")
         ))
         .unwrap();
         let mut s = GraspSolver::new(&p, &SolverConfig::default()).unwrap();

@@ -34,13 +34,14 @@ fn ratio(a: Option<f64>, b: Option<f64>) -> String {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/criterion/grasp");
+    let root =
+        Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).join("target/criterion/grasp");
     let fx = fixtures::all();
     println!("| fixture | joints | rows | build: new grasp µs | build: new wrench µs | native cold µs | native warm µs | cold/warm | Clarabel linear µs | Clarabel/native | OSQP µs | OSQP/native | Clarabel exact µs |");
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut scaling: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
     for f in &fx {
-        let qp = grasp_torque::TorqueQp::new(&f.problem, &Default::default())?;
+        let qp = grasp_torque::TorqueQp::from_problem(&f.problem, &Default::default())?;
         let n = f.name.as_str();
         let cold = median(&root, "native-cold", n);
         let warm = median(&root, "native-warm-1pct", n);
@@ -76,7 +77,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .push((qp.inequality_rows() as f64, c / 1e3));
         }
     }
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/figures/scaling.svg");
+    let path =
+        Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).join("docs/figures/scaling.svg");
     let area = SVGBackend::new(&path, (900, 600)).into_drawing_area();
     area.fill(&WHITE)?;
     let xmax = scaling.values().flatten().map(|p| p.0).fold(1.0, f64::max);

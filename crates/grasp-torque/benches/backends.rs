@@ -36,12 +36,12 @@ fn bench(c: &mut Criterion) {
             b.iter(|| {
                 black_box(
                     native
-                        .build(TorqueQp::new(black_box(p), &native.model).unwrap())
+                        .build(TorqueQp::from_problem(black_box(p), &native.model).unwrap())
                         .unwrap(),
                 )
             })
         });
-        let qp = TorqueQp::new(p, &native.model).unwrap();
+        let qp = TorqueQp::from_problem(p, &native.model).unwrap();
         let (mut cbuf, mut ebuf) = (
             vec![0.0; qp.inequality_rows()],
             vec![0.0; qp.equality_rows()],
@@ -49,7 +49,7 @@ fn bench(c: &mut Criterion) {
         g.bench_function(BenchmarkId::new("build-new-wrench", name), |b| {
             b.iter(|| {
                 qp.c_into(black_box(&p.wrench), &mut cbuf);
-                qp.e_into(black_box(&p.wrench), &mut ebuf);
+                qp.model.e_into(black_box(&p.wrench), &mut ebuf);
             })
         });
         let mut runs = vec![
@@ -69,7 +69,8 @@ fn bench(c: &mut Criterion) {
                 cones,
                 ..Default::default()
             };
-            let mut solver = config.build(qp.clone()).unwrap();
+            let view = config.view(qp.model.clone(), &p.linearization);
+            let mut solver = config.build(view).unwrap();
             let mut sol = Solution::default();
             g.bench_function(BenchmarkId::new(id, name), |b| {
                 b.iter(|| {

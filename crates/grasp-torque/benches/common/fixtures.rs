@@ -1,8 +1,8 @@
 //! The benchmark fixtures, shared by `benches/backends.rs` and
 //! `examples/bench_report.rs` so both name and build them alike.
 
+use grasp_testkit::{synthetic_grasp, ModelMix, SynthSpec};
 use grasp_torque::file::ModelName;
-use grasp_torque::synth::{synthetic_grasp, ModelMix, SynthSpec};
 use grasp_torque::{
     load_problem, solve, ActiveSetSettings, ActiveSetSolver, GraspProblem, ModelOptions, TorqueQp,
     WarmStart,
@@ -19,7 +19,7 @@ pub(crate) struct Fixture {
 fn file(name: &str) -> GraspProblem {
     load_problem(format!(
         "{}/fixtures/{name}.json",
-        env!("CARGO_MANIFEST_DIR")
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../..")
     ))
     .unwrap()
 }
@@ -37,7 +37,7 @@ pub(crate) fn hand(fingers: usize, joints: usize, model: ModelName) -> GraspProb
     spec.linearization.sides = 4;
     for seed in 0.. {
         let p = synthetic_grasp(seed, &spec).into_problem().unwrap();
-        let qp = TorqueQp::new(&p, &ModelOptions::default()).unwrap();
+        let qp = TorqueQp::from_problem(&p, &ModelOptions::default()).unwrap();
         let mut s = ActiveSetSolver::new(qp, ActiveSetSettings::default()).unwrap();
         if solve(&mut s, &p.wrench, &WarmStart::default())
             .unwrap()

@@ -12,7 +12,7 @@ use std::hint::black_box;
 fn a_of(name: &str) -> Matrix {
     let p = load_problem(format!(
         "{}/fixtures/{name}.json",
-        env!("CARGO_MANIFEST_DIR")
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../..")
     ))
     .unwrap();
     p.grasp_matrix.vstack(&p.jacobian_transpose)
@@ -57,9 +57,9 @@ fn pinv(c: &mut Criterion) {
         .iter()
         .map(|n| (n.to_string(), a_of(n)))
         .collect();
-    let mut spec = grasp_torque::synth::SynthSpec::default();
+    let mut spec = grasp_testkit::SynthSpec::default();
     spec.linearization.sides = 3;
-    let p = grasp_torque::synth::synthetic_grasp(3304615860721577304, &spec)
+    let p = grasp_testkit::synthetic_grasp(3304615860721577304, &spec)
         .into_problem()
         .unwrap();
     cases.push((

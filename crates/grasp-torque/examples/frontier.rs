@@ -6,8 +6,7 @@
 
 use grasp_torque::file::ModelName;
 use grasp_torque::{
-    solve_into, Backend, Cones, GraspProblem, SfceSpacing, Solution, SolverConfig, TorqueQp,
-    WarmStart,
+    solve_into, Backend, Cones, GraspProblem, SfceSpacing, Solution, SolverConfig, WarmStart,
 };
 
 // Shared with the benches; this example uses only `hand`.
@@ -28,7 +27,7 @@ fn timed(
         cones,
         ..Default::default()
     };
-    let mut solver = config.build(TorqueQp::new(p, &config.model)?)?;
+    let mut solver = config.build(config.qp(p)?)?;
     let mut s = Solution::default();
     let mut t = Vec::with_capacity(REPEATS);
     for _ in 0..REPEATS {
@@ -115,7 +114,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// One untimed native solve.
 fn timed_once(p: &GraspProblem) -> Result<(Solution, f64), Box<dyn std::error::Error>> {
     let config = SolverConfig::default();
-    let mut solver = config.build(TorqueQp::new(p, &config.model)?)?;
+    let mut solver = config.build(config.qp(p)?)?;
     let mut s = Solution::default();
     solve_into(solver.as_mut(), &p.wrench, &WarmStart::default(), &mut s)?;
     Ok((s, 0.0))

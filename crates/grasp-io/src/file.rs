@@ -3,11 +3,12 @@
 //! Errors name the field (`contacts[1].mu`) and what was expected, or the JSON line and
 //! column when the text is not well-formed.
 
-use crate::cone::Linearization;
-use crate::contact::ContactModel;
-use crate::error::ProblemError;
-use crate::matrix::Matrix;
-use crate::problem::GraspProblem;
+use grasp_core::cone::Linearization;
+use grasp_core::contact::ContactModel;
+use grasp_core::error::ProblemError;
+use grasp_core::matrix::Matrix;
+use grasp_core::model::InternalForces;
+use grasp_core::problem::GraspProblem;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -138,6 +139,9 @@ pub struct Options {
     pub min_normal_force: Option<serde_json::Value>,
     /// A starting torque, one per joint.
     pub initial_torque: Option<Vec<f64>>,
+    /// How the passive internal forces are fixed: `compliance` (default),
+    /// `euclidean` (the paper's `A⁺`) or `free`.
+    pub internal_forces: Option<InternalForces>,
 }
 
 /// A problem file in matrix form.
@@ -173,6 +177,9 @@ pub struct MatrixFile {
     /// A starting torque, one per joint.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub initial_torque: Option<Vec<f64>>,
+    /// `compliance` (default), `euclidean` or `free`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub internal_forces: Option<InternalForces>,
 }
 
 impl MatrixFile {
@@ -190,6 +197,7 @@ impl MatrixFile {
             torque_limits: p.torque_limits.clone(),
             min_normal_force: p.min_normal_force.as_ref().map(|v| serde_json::json!(v)),
             initial_torque: p.initial_torque.clone(),
+            internal_forces: Some(p.internal_forces),
         }
     }
 
@@ -211,6 +219,7 @@ impl MatrixFile {
             torque_limits: self.torque_limits,
             min_normal_force: self.min_normal_force,
             initial_torque: self.initial_torque,
+            internal_forces: self.internal_forces,
         }
         .apply(&mut p)?;
         p.validate()?;
@@ -227,6 +236,9 @@ impl Options {
         p.torque_weights = self.torque_weights;
         p.torque_limits = self.torque_limits;
         p.initial_torque = self.initial_torque;
+        if let Some(i) = self.internal_forces {
+            p.internal_forces = i;
+        }
         p.min_normal_force = match self.min_normal_force {
             None | Some(serde_json::Value::Null) => None,
             Some(serde_json::Value::Number(x)) => {
@@ -258,7 +270,8 @@ impl Options {
     }
 }
 
-pub(crate) fn wrench6(w: &[f64]) -> Result<[f64; 6], ProblemError> {
+/// The wrench field as 6 numbers, or an error naming it.
+pub fn wrench6(w: &[f64]) -> Result<[f64; 6], ProblemError> {
     w.try_into().map_err(|_| {
         ProblemError::invalid(
             "wrench",
@@ -282,8 +295,8 @@ fn rectangular(name: &str, rows: &[Vec<f64>]) -> Result<Matrix, ProblemError> {
 
 /// Deserialises `T` from JSON text, reporting the path of the field at fault.
 pub fn from_json_str<'de, T: Deserialize<'de>>(text: &'de str) -> Result<T, ProblemError> {
-    let de = &mut serde_json::Deserializer::from_str(text);
-    let value = serde_path_to_error::deserialize(de).map_err(|e| {
+    let mut de = serde_json::Deserializer::from_str(text);
+    let value = serde_path_to_error::deserialize(&mut de).map_err(|e| {
         let path = e.path().to_string();
         let inner = e.into_inner();
         let (line, column) = (inner.line(), inner.column());
@@ -299,6 +312,13 @@ pub fn from_json_str<'de, T: Deserialize<'de>>(text: &'de str) -> Result<T, Prob
             line,
             column,
         }
+    })?;
+    // Nothing but white space may follow the object.
+    de.end().map_err(|e| ProblemError::Parse {
+        path: ".".into(),
+        message: "unexpected text after the JSON value".into(),
+        line: e.line(),
+        column: e.column(),
     })?;
     Ok(value)
 }

@@ -3,10 +3,11 @@
 //!
 //! Run: `cargo run --release --example baseline_study`
 
+use grasp_testkit::{synthetic_grasp, ModelMix, SynthSpec};
 use grasp_torque::file::ModelName;
-use grasp_torque::synth::{synthetic_grasp, ModelMix, SynthSpec};
 use grasp_torque::{
-    solve, ActiveSetSettings, ActiveSetSolver, ModelOptions, Solution, Status, TorqueQp, WarmStart,
+    solve, ActiveSetSettings, ActiveSetSolver, ForceSpaceQp, ForceSpaceSolver, ModelOptions,
+    Solution, Status, TorqueQp, WarmStart,
 };
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -39,19 +40,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for seed in 0..2000u64 {
             let p = synthetic_grasp(seed, &spec).into_problem()?;
             let opts = ModelOptions::default();
-            let qp = TorqueQp::new(&p, &opts)?;
+            let qp = TorqueQp::from_problem(&p, &opts)?;
             let settings = ActiveSetSettings::default();
             let after = solve(
                 &mut ActiveSetSolver::new(qp.clone(), settings)?,
                 &p.wrench,
                 &WarmStart::default(),
             )?;
-            let base_qp = TorqueQp::force_space(&p, &opts)?;
-            let base = solve(
-                &mut ActiveSetSolver::new(base_qp, settings)?,
-                &p.wrench,
-                &WarmStart::default(),
-            )?;
+            let base_qp = ForceSpaceQp::new(qp.model.clone(), &p.linearization)?;
+            let mut base = Solution::default();
+            ForceSpaceSolver::new(base_qp, settings)?.solve(&p.wrench, &mut base);
             if after.status != Status::Optimal || base.status != Status::Optimal {
                 continue;
             }
@@ -61,7 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 torque: tau_b.clone(),
                 ..Default::default()
             };
-            qp.complete(&p.wrench, &mut check);
+            qp.complete(&p.wrench, 1e-9, "baseline", &mut check);
             if check.diagnostics.consistency_residual > 1e-9
                 || check.diagnostics.max_violation > 1e-9
             {

@@ -17,11 +17,11 @@
 //!   Jᵀ entry, prismatic joint: d · a                torsion: 0
 //! ```
 
-use crate::contact::ContactModel;
-use crate::error::ProblemError;
 use crate::file::{ModelName, Options};
-use crate::matrix::Matrix;
-use crate::problem::GraspProblem;
+use grasp_core::contact::ContactModel;
+use grasp_core::error::ProblemError;
+use grasp_core::matrix::Matrix;
+use grasp_core::problem::GraspProblem;
 use serde::{Deserialize, Serialize};
 
 /// How far from unit length an axis or normal may be.
@@ -111,7 +111,7 @@ pub struct GeometryFile {
     pub wrench: Vec<f64>,
     /// See the matrix form.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub linearization: Option<crate::cone::Linearization>,
+    pub linearization: Option<grasp_core::cone::Linearization>,
     /// See the matrix form.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub torque_weights: Option<Vec<f64>>,
@@ -124,6 +124,9 @@ pub struct GeometryFile {
     /// See the matrix form.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub initial_torque: Option<Vec<f64>>,
+    /// See the matrix form.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub internal_forces: Option<grasp_core::model::InternalForces>,
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -332,6 +335,7 @@ impl GeometryFile {
             torque_limits: self.torque_limits,
             min_normal_force: self.min_normal_force,
             initial_torque: self.initial_torque,
+            internal_forces: self.internal_forces,
         }
         .apply(&mut p)?;
         p.validate()?;

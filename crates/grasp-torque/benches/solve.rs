@@ -22,7 +22,7 @@ const FIXTURES: [&str; 6] = [
 fn problem(name: &str) -> GraspProblem {
     load_problem(format!(
         "{}/fixtures/{name}.json",
-        env!("CARGO_MANIFEST_DIR")
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../..")
     ))
     .unwrap()
 }
@@ -41,7 +41,7 @@ fn native(c: &mut Criterion) {
     for name in FIXTURES {
         let p = problem(name);
         let config = SolverConfig::default();
-        let qp = TorqueQp::new(&p, &config.model).unwrap();
+        let qp = TorqueQp::from_problem(&p, &config.model).unwrap();
         let mut solver = config.build(qp).unwrap();
         let mut sol = Solution::default();
         let cold = WarmStart::default();
@@ -80,7 +80,7 @@ fn build(c: &mut Criterion) {
         let config = SolverConfig::default();
         g.bench_function(BenchmarkId::new("new-grasp", name), |b| {
             b.iter(|| {
-                let qp = TorqueQp::new(black_box(&p), &ModelOptions::default()).unwrap();
+                let qp = TorqueQp::from_problem(black_box(&p), &ModelOptions::default()).unwrap();
                 black_box(config.build(qp).unwrap());
             })
         });

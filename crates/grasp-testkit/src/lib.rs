@@ -7,9 +7,9 @@
 //! Everything follows from a seed through a small fixed PRNG, so a failing case is
 //! reproducible from its seed alone.
 
-use crate::cone::Linearization;
-use crate::file::ModelName;
-use crate::geometry::{FingerSpec, GeometricContact, GeometryFile, JointSpec, JointType};
+use grasp_core::cone::Linearization;
+use grasp_io::file::ModelName;
+use grasp_io::geometry::{FingerSpec, GeometricContact, GeometryFile, JointSpec, JointType};
 
 /// Which contact models the generator may use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -156,7 +156,7 @@ pub fn synthetic_grasp(seed: u64, spec: &SynthSpec) -> GeometryFile {
     ];
     GeometryFile {
         name: Some(format!("synthetic-{seed}")),
-        description: Some("grasp_core::synth::synthetic_grasp".into()),
+        description: Some("grasp_testkit::synthetic_grasp".into()),
         contacts,
         fingers,
         wrench,
@@ -165,5 +165,41 @@ pub fn synthetic_grasp(seed: u64, spec: &SynthSpec) -> GeometryFile {
         torque_limits: None,
         min_normal_force: None,
         initial_torque: None,
+        internal_forces: None,
     }
+}
+
+/// The reference cases of `shared/reference/cases.json` (copied to `tests/data/`).
+pub fn reference_cases() -> Vec<serde_json::Value> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../tests/data/reference-cases.json"
+    );
+    let text = std::fs::read_to_string(path).expect("reference cases");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("reference JSON");
+    v["cases"].as_array().expect("a case list").clone()
+}
+
+/// The reference model's conventions (`shared/reference/README.md`): passive internal
+/// forces by the Euclidean `A⁺` (item 1) and SFCe latitudes at the paper's eq. 13
+/// angles (item 4). They differ from this project's unit-invariant defaults only where
+/// `[G; Jᵀ]` has a null space, or for SFCe contacts.
+pub fn as_reference(mut p: grasp_core::GraspProblem) -> grasp_core::GraspProblem {
+    p.internal_forces = grasp_core::InternalForces::Euclidean;
+    p.linearization.sfce_spacing = grasp_core::SfceSpacing::Paper;
+    p
+}
+
+/// A reference case's matrix-form problem, with the reference conventions.
+pub fn reference_problem(problem: &serde_json::Value) -> grasp_core::GraspProblem {
+    let file: grasp_io::MatrixFile =
+        serde_json::from_value(problem.clone()).expect("a matrix-form problem");
+    as_reference(file.into_problem().expect("a valid problem"))
+}
+
+/// A reference case's geometry-form problem, with the reference conventions.
+pub fn reference_geometry(geometry: &serde_json::Value) -> grasp_core::GraspProblem {
+    let geo: grasp_io::GeometryFile =
+        serde_json::from_value(geometry.clone()).expect("a geometry-form problem");
+    as_reference(geo.into_problem().expect("a valid problem"))
 }

@@ -1,0 +1,338 @@
+//! The grasp model: everything that depends on neither the wrench nor the cone
+//! representation, built once per grasp and shared (`Send + Sync`, behind an `Arc`).
+//!
+//! With `A = [G; Jᵀ]`, the contact forces that produce `[w; τ]` are
+//! `f = Z1 w + Z2 τ + N ξ` (eq. 31), where `N` spans the null space of A: the passive
+//! internal forces, which neither the wrench nor any torque determines. How `ξ` is fixed
+//! is a modelling choice ([`InternalForces`]):
+//!
+//! - [`InternalForces::Compliance`] (default): `Z = D⁻¹ (A D⁻¹)⁺`, the least-norm force in
+//!   the metric `‖D f‖` with `D = 1` on force components and `1/mu_torsion` on `mz`.
+//!   Every component of `D f` is a force, so the choice does not depend on the unit of
+//!   length; it is the force of least elastic energy of contacts with equal
+//!   translational and torsional compliance per unit of friction. `ξ = 0`.
+//! - [`InternalForces::Euclidean`]: `Z = A⁺`, the paper's (eq. 31) and the reference
+//!   set's; it mixes N and N·m, so with a null space it depends on the unit of length.
+//! - [`InternalForces::Free`]: `ξ` is a decision variable, so only `G f = w`, `Jᵀ f = τ`
+//!   and the cones bind: the least torque any internal force allows.
+//!
+//! `[w; τ]` must lie in the range of A for `G f = w` to hold. With `U⊥` spanning the
+//! complement of the range of the row-equilibrated `R A D⁻¹`, that is `C τ = e(w)`; the
+//! core decides the rank of C once and keeps independent rows only, so no backend
+//! makes a rank decision of its own.
+
+use crate::contact::ContactModel;
+use crate::error::ModelError;
+use crate::linalg::svd;
+use crate::matrix::{dot, norm_inf, Matrix};
+use crate::problem::GraspProblem;
+use serde::{Deserialize, Serialize};
+
+/// How the passive internal forces (the null space of `[G; Jᵀ]`) are fixed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum InternalForces {
+    /// Least norm in the contact-compliance metric (`mz` measured as `mz/mu_torsion`):
+    /// unit-invariant. The default.
+    #[default]
+    Compliance,
+    /// Least Euclidean norm of f, the paper's `A⁺` (eq. 31). Depends on the unit of
+    /// length when `[G; Jᵀ]` has a null space and a soft-finger contact.
+    Euclidean,
+    /// Optimised with the torques: the best case. Needs a backend that supports it.
+    Free,
+}
+
+impl InternalForces {
+    /// `compliance`, `euclidean` or `free`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Compliance => "compliance",
+            Self::Euclidean => "euclidean",
+            Self::Free => "free",
+        }
+    }
+}
+
+/// Whether `C τ = e` is enforced.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Equilibrium {
+    /// Enforce `C τ = e`: every answer balances the wrench (`G f = w`). The default.
+    #[default]
+    Consistent,
+    /// The paper's model as printed: `H τ ≥ c` alone. Its answers generally do not
+    /// balance the wrench; each carries a warning with `‖G f − w‖∞`. For reproducing the
+    /// paper's numbers only.
+    PaperModel,
+}
+
+/// How the model is assembled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModelOptions {
+    /// Consistency equalities on (default) or the paper's model.
+    pub equilibrium: Equilibrium,
+    /// Relative rank tolerance for the pseudo-inverse and the consistency rows: singular
+    /// values at or below `rank_tolerance · σ_max` of the row-equilibrated matrix count
+    /// as zero. Default `1e-9`, as in the reference implementation
+    /// (`shared/reference/README.md`, item 1).
+    pub rank_tolerance: f64,
+}
+
+impl Default for ModelOptions {
+    fn default() -> Self {
+        Self {
+            equilibrium: Equilibrium::Consistent,
+            rank_tolerance: 1e-9,
+        }
+    }
+}
+
+/// One grasp, ready for any cone representation and any wrench. Immutable once built.
+#[derive(Clone, Debug)]
+pub struct GraspModel {
+    /// G, 6 × n.
+    pub grasp_matrix: Matrix,
+    /// Jᵀ, m × n.
+    pub jacobian_transpose: Matrix,
+    /// The contacts, in the column order of G.
+    pub contacts: Vec<ContactModel>,
+    /// Index of each contact's first force component in f.
+    pub offsets: Vec<usize>,
+    /// Objective weights `w_j` (all 1 by default).
+    pub weights: Vec<f64>,
+    /// `|τ_j| ≤ limit`; `None` is unlimited.
+    pub torque_limits: Vec<Option<f64>>,
+    /// `fz ≥ value` per contact (0 by default).
+    pub min_normal_force: Vec<f64>,
+    /// Joint names (empty when unknown).
+    pub joint_names: Vec<String>,
+    /// How the passive internal forces are fixed.
+    pub internal_forces: InternalForces,
+    /// Consistent or paper model.
+    pub equilibrium: Equilibrium,
+    /// The rank tolerance used.
+    pub rank_tolerance: f64,
+    /// Z1, n × 6 (eq. 31).
+    pub z1: Matrix,
+    /// Z2, n × m (eq. 31).
+    pub z2: Matrix,
+    /// Numerical rank of `[G; Jᵀ]`.
+    pub rank: usize,
+    /// N, n × d: a basis of the passive internal forces (the null space of `[G; Jᵀ]`).
+    pub passive_basis: Matrix,
+    /// C, p × m with independent rows (empty in the paper model).
+    pub eq: Matrix,
+    /// `e(w) = −eq_w · w`, p × 6.
+    pub eq_w: Matrix,
+    /// `unreachable · w ≠ 0` means no torque satisfies `C τ = e(w)`, q × 6 (in
+    /// equilibrated wrench units, see [`Self::wrench_scale`]).
+    pub unreachable: Matrix,
+    /// The row equilibration of the wrench rows of A: `w_i · wrench_scale_i` is
+    /// unit-free up to one common force unit.
+    pub wrench_scale: [f64; 6],
+    /// The row equilibration of the torque rows of A, likewise.
+    pub torque_scale: Vec<f64>,
+}
+
+impl GraspModel {
+    /// Builds the model of a validated problem.
+    pub fn new(p: &GraspProblem, opts: &ModelOptions) -> Result<Self, ModelError> {
+        if !(opts.rank_tolerance > 0.0 && opts.rank_tolerance < 1.0) {
+            return Err(ModelError::RankTolerance(opts.rank_tolerance));
+        }
+        let (n, m) = (p.force_dim(), p.joints());
+        let a = p.grasp_matrix.vstack(&p.jacobian_transpose);
+        // Column metric D: mz counts as mz/mu_torsion in the compliance metric.
+        let mut dinv = vec![1.0; n];
+        let mut offsets = Vec::with_capacity(p.contacts.len());
+        let mut off = 0;
+        for c in &p.contacts {
+            offsets.push(off);
+            if p.internal_forces == InternalForces::Compliance {
+                if let ContactModel::SfcLinear { mu_torsion, .. }
+                | ContactModel::SfcElliptic { mu_torsion, .. } = *c
+                {
+                    dinv[off + 3] = mu_torsion;
+                }
+            }
+            off += c.dim();
+        }
+        // Row equilibration R: it leaves the range condition and the least-norm force of
+        // a consistent [w; τ] unchanged, and makes the rank decision unit-free. The
+        // paper's plain A⁺ (`euclidean`, and the paper model's least squares, which
+        // depend on row weights) keeps R = I, so that Z is eq. 49's.
+        let equilibrate = opts.equilibrium == Equilibrium::Consistent
+            && p.internal_forces != InternalForces::Euclidean;
+        let ad = Matrix::from_fn(6 + m, n, |i, j| a[(i, j)] * dinv[j]);
+        let r: Vec<f64> = (0..6 + m)
+            .map(|i| {
+                let nrm = crate::matrix::norm2(ad.row(i));
+                if equilibrate && nrm > 0.0 {
+                    1.0 / nrm
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        let mat = Matrix::from_fn(6 + m, n, |i, j| ad[(i, j)] * r[i]);
+        let dec = svd(&mat).map_err(|_| ModelError::Decomposition {
+            what: "[G; Jᵀ]",
+            rows: 6 + m,
+            cols: n,
+        })?;
+        let rank = dec.rank(opts.rank_tolerance);
+        let zm = dec.pseudo_inverse(opts.rank_tolerance);
+        // Z = D⁻¹ (R A D⁻¹)⁺ R.
+        let z = Matrix::from_fn(n, 6 + m, |i, j| dinv[i] * zm[(i, j)] * r[j]);
+        let z1 = z.columns(0, 6);
+        let z2 = z.columns(6, 6 + m);
+        let passive_basis = Matrix::from_fn(n, n - rank, |i, k| dinv[i] * dec.v[(i, rank + k)]);
+        let mut wrench_scale = [1.0; 6];
+        wrench_scale.copy_from_slice(&r[..6]);
+
+        let (eq, eq_w, unreachable) = match opts.equilibrium {
+            Equilibrium::PaperModel => (
+                Matrix::zeros(0, m),
+                Matrix::zeros(0, 6),
+                Matrix::zeros(0, 6),
+            ),
+            Equilibrium::Consistent => {
+                // U⊥ᵀ R [w; τ] = 0 with x = R_τ τ: P_τ x = −P_w R_w w.
+                let p0 = 6 + m - rank;
+                let pw0 = Matrix::from_fn(p0, 6, |i, j| dec.u[(j, rank + i)]);
+                let pt = Matrix::from_fn(p0, m, |i, j| dec.u[(6 + j, rank + i)]);
+                // One rank decision for C: independent rows only. P_τ has orthonormal
+                // origin (‖P_τ‖ ≤ 1), so the threshold is absolute.
+                let dc = svd(&pt).map_err(|_| ModelError::Decomposition {
+                    what: "the consistency equalities",
+                    rows: p0,
+                    cols: m,
+                })?;
+                let rc =
+                    dc.s.iter()
+                        .take_while(|&&s| s > opts.rank_tolerance)
+                        .count();
+                let eq = Matrix::from_fn(rc, m, |i, j| dc.v[(j, i)] * r[6 + j]);
+                let eq_w = Matrix::from_fn(rc, 6, |i, j| {
+                    r[j] * (0..p0).map(|k| dc.u[(k, i)] * pw0[(k, j)]).sum::<f64>() / dc.s[i]
+                });
+                // Applied to the equilibrated wrench.
+                let unreachable = Matrix::from_fn(p0 - rc, 6, |i, j| {
+                    (0..p0)
+                        .map(|k| dc.u[(k, rc + i)] * pw0[(k, j)])
+                        .sum::<f64>()
+                });
+                (eq, eq_w, unreachable)
+            }
+        };
+        let min_normal_force = p
+            .min_normal_force
+            .clone()
+            .unwrap_or_else(|| vec![0.0; p.contacts.len()]);
+        Ok(Self {
+            grasp_matrix: p.grasp_matrix.clone(),
+            jacobian_transpose: p.jacobian_transpose.clone(),
+            contacts: p.contacts.clone(),
+            offsets,
+            weights: p.torque_weights.clone().unwrap_or_else(|| vec![1.0; m]),
+            torque_limits: p.torque_limits.clone().unwrap_or_else(|| vec![None; m]),
+            min_normal_force,
+            joint_names: p.joint_names.clone(),
+            internal_forces: p.internal_forces,
+            equilibrium: opts.equilibrium,
+            rank_tolerance: opts.rank_tolerance,
+            z1,
+            z2,
+            rank,
+            passive_basis,
+            eq,
+            eq_w,
+            unreachable,
+            wrench_scale,
+            torque_scale: r[6..].to_vec(),
+        })
+    }
+
+    /// Number of joints m.
+    pub fn joints(&self) -> usize {
+        self.jacobian_transpose.nrows()
+    }
+
+    /// Number of contact force components n.
+    pub fn force_dim(&self) -> usize {
+        self.grasp_matrix.ncols()
+    }
+
+    /// Number of consistency equalities p.
+    pub fn equality_rows(&self) -> usize {
+        self.eq.nrows()
+    }
+
+    /// Dimension d of the passive internal forces (the null space of `[G; Jᵀ]`).
+    pub fn passive_dim(&self) -> usize {
+        self.passive_basis.ncols()
+    }
+
+    /// Number of internal-force variables a backend optimises: d with
+    /// [`InternalForces::Free`], else 0.
+    pub fn free_dim(&self) -> usize {
+        if self.internal_forces == InternalForces::Free {
+            self.passive_dim()
+        } else {
+            0
+        }
+    }
+
+    /// The name of joint `j`: its given name, else `joint j`.
+    pub fn joint_name(&self, j: usize) -> String {
+        self.joint_names
+            .get(j)
+            .cloned()
+            .unwrap_or_else(|| format!("joint {j}"))
+    }
+
+    /// `e(w)` into `out` (length: equality rows).
+    pub fn e_into(&self, w: &[f64; 6], out: &mut [f64]) {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = -dot(self.eq_w.row(i), w);
+        }
+    }
+
+    /// `f = Z1 w + Z2 τ + N ξ` into `out` (eq. 31); `xi` is empty unless the internal
+    /// forces are free.
+    pub fn forces_into(&self, w: &[f64; 6], tau: &[f64], xi: &[f64], out: &mut [f64]) {
+        for (i, o) in out.iter_mut().enumerate() {
+            let mut v = dot(self.z1.row(i), w) + dot(self.z2.row(i), tau);
+            if !xi.is_empty() {
+                v += dot(self.passive_basis.row(i), xi);
+            }
+            *o = v;
+        }
+    }
+
+    /// The wrench in equilibrated units: `w_i · wrench_scale_i`.
+    pub fn scaled_wrench(&self, w: &[f64; 6]) -> [f64; 6] {
+        let mut s = *w;
+        for (v, r) in s.iter_mut().zip(&self.wrench_scale) {
+            *v *= r;
+        }
+        s
+    }
+
+    /// How far `w` is from any wrench some torque can balance under `C τ = e`, in
+    /// equilibrated wrench units (0 in the paper model).
+    pub fn unreachable_residual(&self, w: &[f64; 6]) -> f64 {
+        let ws = self.scaled_wrench(w);
+        (0..self.unreachable.nrows())
+            .map(|i| dot(self.unreachable.row(i), &ws).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// Tolerance on [`Self::unreachable_residual`]: the rank decision treated singular
+    /// values below `rank_tolerance` as zero, so `e` may be off by as much, relative to
+    /// the equilibrated wrench.
+    pub fn unreachable_tolerance(&self, w: &[f64; 6]) -> f64 {
+        10.0 * self.rank_tolerance * norm_inf(&self.scaled_wrench(w)).max(f64::MIN_POSITIVE)
+    }
+}

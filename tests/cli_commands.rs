@@ -1,0 +1,87 @@
+//! The `sweep` and `compare` commands on the bundled fixtures.
+
+fn fixture(name: &str) -> String {
+    format!("{}/fixtures/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn sweep_command_writes_csv_svg_and_json() {
+    let dir = std::env::temp_dir().join(format!("grasp-torque-sweep-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (csv, svg) = (dir.join("s.csv"), dir.join("s.svg"));
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
+        .args([
+            "sweep",
+            &fixture("hand4-sfce.json"),
+            "--sides",
+            "4,8,16",
+            "--latitudes",
+            "1..2",
+            "--repeats",
+            "3",
+        ])
+        .args([
+            "--csv",
+            csv.to_str().unwrap(),
+            "--svg",
+            svg.to_str().unwrap(),
+            "--format",
+            "json",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["exact_objective"].as_f64().unwrap() > 0.0);
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 6);
+    for key in [
+        "sides",
+        "latitudes",
+        "objective",
+        "gap",
+        "constraint_rows",
+        "iterations",
+        "solve_time_us",
+    ] {
+        assert!(rows[0].get(key).is_some(), "{key}");
+    }
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count(), 7);
+    let figure = std::fs::read_to_string(&svg).unwrap();
+    assert!(figure.starts_with("<svg") && figure.contains("σ*"));
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
+        .args(["sweep", &fixture("hand4-sfce.json"), "--sides", "2..8"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--sides"));
+}
+
+#[test]
+fn compare_agrees_on_every_fixture() {
+    let mut files = Vec::new();
+    for dir in ["fixtures", "fixtures/table1"] {
+        for e in std::fs::read_dir(format!("{}/{dir}", env!("CARGO_MANIFEST_DIR"))).unwrap() {
+            let path = e.unwrap().path();
+            if path.extension().is_some_and(|x| x == "json") {
+                files.push(path);
+            }
+        }
+    }
+    assert!(files.len() >= 12);
+    for f in files {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
+            .args(["compare", f.to_str().unwrap(), "--format", "json"])
+            .output()
+            .unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(out.status.code(), Some(0), "{f:?}: {}", v["disagreements"]);
+        assert_eq!(v["agree"], true);
+    }
+}
