@@ -37,7 +37,10 @@ fn sweep_command_writes_csv_svg_and_json() {
         String::from_utf8_lossy(&out.stderr)
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert!(v["exact_objective"].as_f64().unwrap() > 0.0);
+    // σ* comes from an exact-cone backend, when one is compiled in.
+    if cfg!(feature = "clarabel") {
+        assert!(v["exact_objective"].as_f64().unwrap() > 0.0);
+    }
     let rows = v["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 6);
     for key in [

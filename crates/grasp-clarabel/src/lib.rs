@@ -16,8 +16,9 @@
 //!
 //! **Scaling.** An interior-point method stops on absolute and relative tolerances, so
 //! the data are scaled before Clarabel sees them: every row is in force units (`mz`
-//! counted as `mz/mu_torsion`), each variable is scaled to force units by its column
-//! of Z, and every solve divides the right-hand side by its own magnitude α (the
+//! counted as `mz/mu_torsion`), the torques are scaled to `k √w_j τ_j` (the objective
+//! becomes `‖x‖²`, with k putting x in force units), the free internal forces by their
+//! force response, and every solve divides the right-hand side by its own magnitude α (the
 //! problem is homogeneous: `(w, f_min, τmax) → α(…)` gives `τ → α τ`). The answer is
 //! unscaled afterwards, so it is the same in any units and at any load.
 
@@ -138,22 +139,41 @@ impl ClarabelSolver {
                 fscale[c.offset + 3] = 1.0 / mu_torsion;
             }
         }
-        // Column scales: the force response of a unit of each variable.
-        let mut col_scale = vec![1.0; nx];
-        for (j, s) in col_scale.iter_mut().enumerate().take(m + d) {
-            let col = |i: usize| {
-                fscale[i]
-                    * if j < m {
-                        model.z2[(i, j)]
-                    } else {
-                        model.passive_basis[(i, j - m)]
-                    }
-            };
-            let v: Vec<f64> = (0..model.force_dim()).map(col).collect();
-            let nrm = norm2(&v);
-            if nrm > 0.0 {
-                *s = nrm;
+        // Column scales: the force response of a unit of each variable. A variable
+        // with no response at rounding level (a joint that moves no contact) takes the
+        // largest scale, so that its rounding-level column does not blow up.
+        let mut col_scale: Vec<f64> = (0..nx)
+            .map(|j| {
+                if j >= m + d {
+                    return 1.0;
+                }
+                let v: Vec<f64> = (0..model.force_dim())
+                    .map(|i| {
+                        fscale[i]
+                            * if j < m {
+                                model.z2[(i, j)]
+                            } else {
+                                model.passive_basis[(i, j - m)]
+                            }
+                    })
+                    .collect();
+                norm2(&v)
+            })
+            .collect();
+        let largest = col_scale[m..m + d].iter().copied().fold(0.0, f64::max);
+        for s in &mut col_scale[m..m + d] {
+            if s.is_nan() || *s <= 1e3 * f64::EPSILON * largest {
+                *s = if largest > 0.0 { largest } else { 1.0 };
             }
+        }
+        // Torques: x_j = k √w_j τ_j, so that the objective is ‖x‖² (a least-distance
+        // problem, P = 2I) and k = max_j (response_j / √w_j) puts x in force units.
+        let k = (0..m)
+            .map(|j| col_scale[j] / model.weights[j].sqrt())
+            .fold(0.0, f64::max);
+        let k = if k > 0.0 && k.is_finite() { k } else { 1.0 };
+        for j in 0..m {
+            col_scale[j] = k * model.weights[j].sqrt();
         }
         // A row "v·f + k ≥ 0" (v on force components, already in force units).
         let force_row = |v: &[(usize, f64)], k: f64| -> Row {
@@ -293,18 +313,10 @@ impl ClarabelSolver {
             }
         }
         let a = CscMatrix::new_from_triplets(rows.len(), nx, ii, jj, vv);
-        // ½ xᵀ P x = Σ w_j τ_j² / (α² κ), normalised so its largest entry is 2.
-        let diag: Vec<f64> = (0..m)
-            .map(|j| model.weights[j] / (col_scale[j] * col_scale[j]))
-            .collect();
-        let kappa = diag.iter().copied().fold(f64::MIN_POSITIVE, f64::max);
-        let p = CscMatrix::new_from_triplets(
-            nx,
-            nx,
-            (0..m).collect(),
-            (0..m).collect(),
-            diag.iter().map(|v| 2.0 * v / kappa).collect(),
-        );
+        // ½ xᵀ P x = ‖x_τ‖² = Σ w_j τ_j² / (α² κ) with κ = 1/k².
+        let kappa = 1.0 / (k * k);
+        let p =
+            CscMatrix::new_from_triplets(nx, nx, (0..m).collect(), (0..m).collect(), vec![2.0; m]);
         Ok(Self {
             settings,
             p,
