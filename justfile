@@ -6,7 +6,7 @@ test:
 
 # Criterion benchmarks; medians end up under target/criterion.
 bench:
-    cargo bench
+    cargo bench --workspace
     python3 scripts/criterion-medians.py
 
 # Formatting and lints, as CI checks them.

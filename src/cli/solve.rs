@@ -226,8 +226,16 @@ fn text_report(
     let _ = writeln!(o, "\njoint torques");
     let names: Vec<String> = (0..model.joints()).map(|j| model.joint_name(j)).collect();
     let width = names.iter().map(|n| n.chars().count()).max().unwrap_or(0);
+    // Torques below the check's tolerance of the largest are rounding: shown as 0.
+    let tmax = s.torque.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let tzero = s.diagnostics.check_tolerance * tmax;
     for (n, t) in names.iter().zip(&s.torque) {
-        let _ = writeln!(o, "  {n:<width$}  {:>12}", g(*t, 7));
+        let shown = if t.abs() <= tzero {
+            "0".into()
+        } else {
+            g(*t, 7)
+        };
+        let _ = writeln!(o, "  {n:<width$}  {shown:>13}");
     }
     // Components below the check's tolerance of the largest force are rounding.
     let fmax = s.contact_forces.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -250,6 +258,7 @@ fn text_report(
             .map(|t| format!("{t:>11}"))
             .collect();
         let margin = match s.diagnostics.friction_margins.get(i).copied().flatten() {
+            Some(m) if m.abs() <= s.diagnostics.check_tolerance => "0".into(),
             Some(m) => g(m, 4),
             None => "unloaded".into(),
         };
@@ -273,10 +282,27 @@ fn text_report(
             format!("(the object is NOT held: > {})", g(tol, 2))
         }
     );
+    let jt = &model.jacobian_transpose;
+    let tscale = (0..model.joints())
+        .map(|j| {
+            jt.row(j)
+                .iter()
+                .zip(&s.contact_forces)
+                .map(|(a, b)| (a * b).abs())
+                .sum::<f64>()
+                + s.torque[j].abs()
+        })
+        .fold(0.0, f64::max);
+    let ttol = d.check_tolerance * tscale;
     let _ = writeln!(
         o,
-        "  ‖Jᵀf − τ‖∞  {:>10}   (the joints produce f)",
-        g(d.torque_residual, 3)
+        "  ‖Jᵀf − τ‖∞  {:>10}   {}",
+        g(d.torque_residual, 3),
+        if d.torque_residual <= ttol {
+            format!("(the joints produce f: ≤ {})", g(ttol, 2))
+        } else {
+            format!("(the joints do NOT produce f: > {})", g(ttol, 2))
+        }
     );
     if model.equilibrium == Equilibrium::Consistent {
         let _ = writeln!(
@@ -285,22 +311,34 @@ fn text_report(
             g(d.consistency_residual, 3)
         );
     }
+    // Violations are judged against the check's tolerance of the largest force.
+    let vtol = 10.0 * d.check_tolerance * fmax;
+    let verdict = |v: f64| {
+        if v <= vtol {
+            format!("held to ≤ {}", g(vtol, 2))
+        } else {
+            format!("VIOLATED beyond {}", g(vtol, 2))
+        }
+    };
     if qp.constraints.has_exact() {
         let _ = writeln!(
             o,
-            "  max(g(f) − fz) {:>7}   (exact cones; ≤ 0 inside)",
-            g(d.cone_violation, 3)
+            "  max(g(f) − fz) {:>7}   (exact cones, ≤ 0 inside: {})",
+            g(d.cone_violation, 3),
+            verdict(d.cone_violation)
         );
         let _ = writeln!(
             o,
-            "  max(c − Hτ) {:>10}   (minimum normal forces and torque limits)",
-            g(d.max_violation, 3)
+            "  max(c − Hτ) {:>10}   (minimum normal forces and torque limits: {})",
+            g(d.max_violation, 3),
+            verdict(d.max_violation)
         );
     } else {
         let _ = writeln!(
             o,
-            "  max(c − Hτ) {:>10}   (inscribed cones, minimum normal forces, torque limits)",
-            g(d.max_violation, 3)
+            "  max(c − Hτ) {:>10}   (inscribed cones, minimum normal forces, torque limits: {})",
+            g(d.max_violation, 3),
+            verdict(d.max_violation)
         );
     }
     let _ = writeln!(o, "\niterations  {}", s.iterations);

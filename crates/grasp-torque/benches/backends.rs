@@ -2,8 +2,8 @@
 //! SFCl and SFCe at N = 4…32): model build, the native solve cold and warm, Clarabel on
 //! the same linearised QP and on the exact cones, and OSQP (with `--features osqp`).
 //!
-//! Run: `cargo bench --bench backends --features osqp`, then
-//! `cargo run --release --example bench_report` for the tables in docs/benchmarks.md.
+//! Run: `cargo bench -p grasp-torque --bench backends --features osqp`, then
+//! `cargo run --release -p grasp-torque --example bench_report` for the tables in docs/benchmarks.md.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use grasp_torque::{

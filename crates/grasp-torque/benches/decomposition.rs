@@ -2,7 +2,7 @@
 //! 10 × 8 for the paper example, 26 × 18 for the 5-finger mixed hand), and their
 //! accuracy, which decided the choice.
 //!
-//! Run: `cargo bench --bench decomposition`. Figures are in docs/benchmarks.md.
+//! Run: `cargo bench -p grasp-torque --bench decomposition`. Figures are in docs/benchmarks.md.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use grasp_torque::linalg::svd;

@@ -1,7 +1,7 @@
 //! Native solver benchmarks: the paper example and the bundled hand fixtures, cold and
 //! warm-started after a 1% wrench change, plus model build times.
 //!
-//! Run: `cargo bench --bench solve`. Figures are in docs/benchmarks.md.
+//! Run: `cargo bench -p grasp-torque --bench solve`. Figures are in docs/benchmarks.md.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use grasp_torque::{

@@ -1,7 +1,7 @@
 //! How much the torque-space optimum saves over the contact-force optimum mapped
 //! through Jᵀ, on 2000 synthetic grasps per hand type (docs/experiments.md).
 //!
-//! Run: `cargo run --release --example baseline_study`
+//! Run: `cargo run --release -p grasp-torque --example baseline_study`
 
 use grasp_testkit::{synthetic_grasp, ModelMix, SynthSpec};
 use grasp_torque::file::ModelName;

@@ -1,7 +1,7 @@
 //! Tables and the scaling figure of docs/benchmarks.md, from the criterion results of
-//! `cargo bench --bench backends --features osqp` (read from target/criterion).
+//! `cargo bench -p grasp-torque --bench backends --features osqp` (read from target/criterion).
 //!
-//! Run: `cargo run --release --example bench_report > /tmp/tables.md`
+//! Run: `cargo run --release -p grasp-torque --example bench_report > /tmp/tables.md`
 //! (also writes docs/figures/scaling.svg).
 
 use plotters::prelude::*;

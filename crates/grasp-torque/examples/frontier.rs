@@ -2,7 +2,7 @@
 //! and hand, the smallest linearisation whose σ is within 1 %, 0.1 % and 0.01 % of the
 //! exact optimum σ*, with its native solve time, next to the exact solve's time.
 //!
-//! Run: `cargo run --release --example frontier`
+//! Run: `cargo run --release -p grasp-torque --example frontier`
 
 use grasp_torque::file::ModelName;
 use grasp_torque::{

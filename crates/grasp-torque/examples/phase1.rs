@@ -2,7 +2,7 @@
 //! the paper's primal iteration with an elastic start, on the 123 linearised reference
 //! problems (41 grasps × N = 4, 8, 16).
 //!
-//! Run: `cargo run --release --example phase1`
+//! Run: `cargo run --release -p grasp-torque --example phase1`
 
 use grasp_torque::file::MatrixFile;
 use grasp_torque::{
