@@ -1,7 +1,8 @@
 //! `grasp-torque`: minimum-torque grasp solving from the shell.
 //!
-//! Exit codes: 0 optimal (or agreement), 2 invalid input or usage, 3 infeasible,
-//! 4 iteration limit or numerical failure, 5 backends disagree (`compare`).
+//! Exit codes: 0 optimal (or agreement), 1 output could not be written, 2 invalid input
+//! or usage, 3 infeasible, 4 iteration limit or numerical failure, 5 backends disagree
+//! (`compare`).
 
 mod cli;
 
@@ -19,7 +20,12 @@ fn main() -> ExitCode {
         Ok(code) => ExitCode::from(code),
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(2)
+            // 1: the output could not be written; 2: invalid input or usage.
+            if e.downcast_ref::<cli::OutputError>().is_some() {
+                ExitCode::from(1)
+            } else {
+                ExitCode::from(2)
+            }
         }
     }
 }

@@ -88,3 +88,45 @@ fn compare_agrees_on_every_fixture() {
         assert_eq!(v["agree"], true);
     }
 }
+
+#[test]
+fn table_markdown_rows_match_their_headers_and_csv_refuses_mixed_joints() {
+    let files = [
+        fixture("table1/1-aluminium-block.json"),
+        fixture("hand3-pcwf.json"),
+        fixture("table1/6-cup.json"),
+    ];
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
+        .arg("table")
+        .args(&files)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    // Every table row has as many cells as its header; two joint sets, two tables.
+    let cells = |l: &str| l.replace("\\|", "").matches('|').count();
+    let mut header = None;
+    let mut tables = 0;
+    for line in text.lines() {
+        if !line.starts_with('|') {
+            header = None;
+            continue;
+        }
+        match header {
+            None => {
+                header = Some(cells(line));
+                tables += 1;
+            }
+            Some(h) => assert_eq!(cells(line), h, "{line}"),
+        }
+    }
+    assert_eq!(tables, 2, "{text}");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
+        .arg("table")
+        .args(&files)
+        .args(["--format", "csv"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("different joints"));
+}

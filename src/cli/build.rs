@@ -22,6 +22,6 @@ pub(crate) fn run(args: &BuildArgs) -> Result<u8> {
         "built by grasp-torque from {}",
         args.problem.display()
     ));
-    println!("{}", serde_json::to_string_pretty(&file)?);
+    outln!("{}", serde_json::to_string_pretty(&file)?);
     Ok(0)
 }

@@ -188,16 +188,16 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
                 })
                 .collect();
             let out = json!({"sides": p.linearization.sides, "latitudes": p.linearization.latitudes, "runs": rows, "agree": agree, "disagreements": problems});
-            println!("{}", serde_json::to_string_pretty(&out)?);
+            outln!("{}", serde_json::to_string_pretty(&out)?);
         }
         Format::Text => {
-            println!(
+            outln!(
                 "problem {}  (N = {}, K = {})\n",
                 args.problem.display(),
                 p.linearization.sides,
                 p.linearization.latitudes
             );
-            println!(
+            outln!(
                 "{:<11} {:<7} {:<18} {:>14} {:>12} {:>6} {:>11} {:>10} {:>10}",
                 "backend",
                 "cones",
@@ -213,7 +213,7 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
                 let s = &r.solution;
                 let ok = !s.torque.is_empty();
                 let dash = || "—".to_string();
-                println!(
+                outln!(
                     "{:<11} {:<7} {:<18} {:>14} {:>12} {:>6} {:>11} {:>10} {:>10}",
                     r.backend.name(),
                     r.cones.name(),
@@ -233,13 +233,13 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
                     if ok { g(min_margin(s), 3) } else { dash() },
                 );
             }
-            println!();
+            outln!();
             if agree {
-                println!("verdict: agree (linearised backends within their tolerances; exact σ* ≤ every linearised σ)");
+                outln!("verdict: agree (linearised backends within their tolerances; exact σ* ≤ every linearised σ)");
             } else {
-                println!("verdict: DISAGREE");
+                outln!("verdict: DISAGREE");
                 for d in &problems {
-                    println!("  - {d}");
+                    outln!("  - {d}");
                 }
             }
         }

@@ -1,5 +1,22 @@
 //! Command-line parsing and the subcommands.
 
+/// Writes a line to standard output; a write error (a full disk, a closed file)
+/// returns from the calling function as [`OutputError`], never a panic.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*).map_err($crate::cli::OutputError)?
+    }};
+}
+
+/// [`outln!`] without the newline.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        write!(std::io::stdout().lock(), $($arg)*).map_err($crate::cli::OutputError)?
+    }};
+}
+
 mod build;
 mod compare;
 mod format;
@@ -164,14 +181,29 @@ pub(crate) fn load(path: &PathBuf) -> Result<GraspProblem> {
     grasp_torque::load_problem(path).with_context(|| format!("{}", path.display()))
 }
 
+/// Standard output could not be written.
+#[derive(Debug)]
+pub(crate) struct OutputError(pub(crate) std::io::Error);
+
+impl std::fmt::Display for OutputError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "could not write to standard output: {}", self.0)
+    }
+}
+
+impl std::error::Error for OutputError {}
+
 pub(crate) fn run() -> Result<u8> {
     let cli = Cli::parse();
-    match cli.command {
+    let code = match cli.command {
         Command::Solve(args) => solve::run(&args),
         Command::Build(args) => build::run(&args),
         #[cfg(feature = "active-set")]
         Command::Table(args) => table::run(&args),
         Command::Compare(args) => compare::run(&args),
         Command::Sweep(args) => sweep::run(&args),
-    }
+    }?;
+    use std::io::Write as _;
+    std::io::stdout().flush().map_err(OutputError)?;
+    Ok(code)
 }

@@ -115,8 +115,14 @@ pub(crate) fn run(args: &SweepArgs) -> Result<u8> {
             .map_err(|e| anyhow::anyhow!("--svg {}: {e}", path.display()))?;
     }
     match args.format {
-        Format::Json => println!("{}", serde_json::to_string_pretty(&to_json(&result))?),
-        Format::Text => print_text(&args.problem, &result),
+        Format::Json => outln!("{}", serde_json::to_string_pretty(&to_json(&result))?),
+        Format::Text => print_text(
+            &args.problem,
+            &result,
+            p.contacts
+                .iter()
+                .any(|c| matches!(c, grasp_torque::ContactModel::SfcElliptic { .. })),
+        )?,
     }
     Ok(0)
 }
@@ -162,22 +168,40 @@ fn write_csv(path: &Path, s: &Sweep) -> Result<()> {
     Ok(())
 }
 
-fn print_text(problem: &Path, s: &Sweep) {
-    println!("problem {}", problem.display());
+fn print_text(problem: &Path, s: &Sweep, sfce: bool) -> Result<()> {
+    outln!("problem {}", problem.display());
     match (s.exact_objective, s.exact_time_us) {
-        (Some(e), Some(t)) => println!("exact cones (clarabel): σ* = {}  ({:.1} µs)", g(e, 10), t),
-        _ => println!("exact cones: unavailable (clarabel not compiled in, or not optimal)"),
+        (Some(e), Some(t)) => outln!("exact cones (clarabel): σ* = {}  ({:.1} µs)", g(e, 10), t),
+        _ => outln!("exact cones: unavailable (clarabel not compiled in, or not optimal)"),
     }
-    println!("median of {} solves per row\n", s.repeats);
-    println!(
-        "{:>5} {:>3} {:>6} {:>16} {:>11} {:>6} {:>10}",
-        "N", "K", "rows", "σ(N)", "gap", "iter", "time µs"
+    outln!(
+        "gap = (σ(N) − σ*)/σ*, relative; time: median of {} solves per row\n",
+        s.repeats
+    );
+    // K (SFCe latitudes) matters only with SFCe contacts.
+    let k_head = if sfce {
+        format!("{:>3} ", "K")
+    } else {
+        String::new()
+    };
+    outln!(
+        "{:>5} {k_head}{:>6} {:>16} {:>11} {:>6} {:>10}",
+        "N",
+        "rows",
+        "σ(N)",
+        "gap",
+        "iter",
+        "time µs"
     );
     for r in &s.rows {
-        println!(
-            "{:>5} {:>3} {:>6} {:>16} {:>11} {:>6} {:>10.2}",
+        let k = if sfce {
+            format!("{:>3} ", r.latitudes)
+        } else {
+            String::new()
+        };
+        outln!(
+            "{:>5} {k}{:>6} {:>16} {:>11} {:>6} {:>10.2}",
             r.sides,
-            r.latitudes,
             r.constraint_rows,
             r.objective
                 .map_or(r.status.as_str().to_string(), |o| g(o, 10)),
@@ -186,6 +210,14 @@ fn print_text(problem: &Path, s: &Sweep) {
             r.solve_time_us
         );
     }
+    if s.gaps_clamped > 0 {
+        outln!(
+            "\n{} gap(s) slightly below 0 (within the exact solver's tolerance {:.0e} of σ*) shown as 0",
+            s.gaps_clamped,
+            grasp_torque::sweep::GAP_FLOOR
+        );
+    }
+    Ok(())
 }
 
 type DrawResult<T> = std::result::Result<T, Box<dyn std::error::Error>>;

@@ -96,7 +96,7 @@ pub(crate) fn compare(name: String, p: &GraspProblem) -> Result<Row> {
     let tol = 1e-9 * scale;
     let baseline_note = (d.consistency_residual > tol || d.max_violation > tol).then(|| {
         format!(
-            "the baseline torque is not admissible under the torque model: ‖C τ − e‖∞ = {:.3e}, largest cone-row violation {:.3e} (the force-space optimum uses passive internal forces in null([G; Jᵀ]), which the model sets to zero)",
+            "the baseline torque is not admissible under the torque model: ‖C τ − e‖∞ = {:.3e}, largest cone-row violation {:.3e} (the force-space optimum uses passive internal forces in null([G; Jᵀ]), which the torque model fixes by its `internal_forces` assumption)",
             d.consistency_residual, d.max_violation
         )
     });
@@ -172,15 +172,22 @@ pub(crate) fn run(args: &TableArgs) -> Result<u8> {
                     "sigma_before": qb, "sigma_after": qa, "sigma_reduction_percent": reduction(qb, qa),
                 }
             });
-            println!("{}", serde_json::to_string_pretty(&out)?);
+            outln!("{}", serde_json::to_string_pretty(&out)?);
         }
         TableFormat::Csv => {
             let joints = &rows[0].joints;
-            println!("object,row,{},sum_abs,sigma", joints.join(","));
+            if let Some(r) = rows.iter().find(|r| r.joints != *joints) {
+                bail!(
+                    "--format csv: {} and {} have different joints, and a CSV file has one header; use --format markdown (one table per set of joints) or json",
+                    rows[0].name,
+                    r.name
+                );
+            }
+            outln!("object,row,{},sum_abs,sigma", joints.join(","));
             for r in &rows {
                 for (label, t) in [("before", &r.before), ("after", &r.after)] {
                     let cells: Vec<String> = t.iter().map(|v| format!("{}", v.abs())).collect();
-                    println!(
+                    outln!(
                         "{},{label},{},{},{}",
                         r.name,
                         cells.join(","),
@@ -189,51 +196,88 @@ pub(crate) fn run(args: &TableArgs) -> Result<u8> {
                     );
                 }
             }
-            println!(
+            outln!(
                 "overall,before,{},{sb},{qb}",
                 vec![""; joints.len()].join(",")
             );
-            println!(
+            outln!(
                 "overall,after,{},{sa},{qa}",
                 vec![""; joints.len()].join(",")
             );
         }
         TableFormat::Markdown => {
-            let joints = &rows[0].joints;
-            println!("Absolute joint torques (N·m): before = contact-force optimum mapped through Jᵀ, after = torque-space optimum.\n");
-            println!("| object | | {} | Σ\\|τ\\| | σ = Στ² |", joints.join(" | "));
-            println!("|---|---|{}---|---|", "---|".repeat(joints.len()));
+            outln!("Absolute joint torques (N·m): before = contact-force optimum mapped through Jᵀ, after = torque-space optimum.");
+            // One table per set of joints: a column is one joint.
+            let mut groups: Vec<(&Vec<String>, Vec<&Row>)> = Vec::new();
             for r in &rows {
-                for (label, t) in [("before", &r.before), ("after", &r.after)] {
-                    let cells: Vec<String> = t.iter().map(|v| format!("{:.4}", v.abs())).collect();
-                    let name = if label == "before" {
-                        r.name.as_str()
-                    } else {
-                        ""
-                    };
-                    println!(
-                        "| {name} | {label} | {} | {:.4} | {} |",
-                        cells.join(" | "),
-                        Row::sum_abs(t),
-                        g(Row::sigma(t), 4)
-                    );
+                match groups.iter_mut().find(|(j, _)| **j == r.joints) {
+                    Some((_, g)) => g.push(r),
+                    None => groups.push((&r.joints, vec![r])),
                 }
-                println!(
-                    "| | reduction | {}| {:.1} % | {:.1} % |",
-                    "| ".repeat(joints.len()),
-                    reduction(Row::sum_abs(&r.before), Row::sum_abs(&r.after)),
-                    reduction(Row::sigma(&r.before), Row::sigma(&r.after))
+            }
+            for (joints, group) in &groups {
+                let line = |cells: Vec<String>| format!("| {} |", cells.join(" | "));
+                let mut head = vec!["object".to_string(), String::new()];
+                head.extend(joints.iter().cloned());
+                head.extend(["Σ\\|τ\\|".to_string(), "σ = Στ²".to_string()]);
+                outln!("\n{}", line(head.clone()));
+                outln!("{}", line(vec!["---".to_string(); head.len()]));
+                let blank = || vec![String::new(); joints.len()];
+                for r in group {
+                    for (label, t) in [("before", &r.before), ("after", &r.after)] {
+                        let mut cells = vec![
+                            if label == "before" {
+                                r.name.clone()
+                            } else {
+                                String::new()
+                            },
+                            label.to_string(),
+                        ];
+                        cells.extend(t.iter().map(|v| format!("{:.4}", v.abs())));
+                        cells.push(format!("{:.4}", Row::sum_abs(t)));
+                        cells.push(g(Row::sigma(t), 4));
+                        outln!("{}", line(cells));
+                    }
+                    let mut cells = vec![String::new(), "reduction".to_string()];
+                    cells.extend(blank());
+                    cells.push(format!(
+                        "{:.1} %",
+                        reduction(Row::sum_abs(&r.before), Row::sum_abs(&r.after))
+                    ));
+                    cells.push(format!(
+                        "{:.1} %",
+                        reduction(Row::sigma(&r.before), Row::sigma(&r.after))
+                    ));
+                    outln!("{}", line(cells));
+                }
+                let mut cells = vec!["**overall**".to_string(), "reduction".to_string()];
+                cells.extend(blank());
+                let sum = |f: fn(&[f64]) -> f64, before: bool| -> f64 {
+                    group
+                        .iter()
+                        .map(|r| f(if before { &r.before } else { &r.after }))
+                        .sum()
+                };
+                cells.push(format!(
+                    "{:.1} %",
+                    reduction(sum(Row::sum_abs, true), sum(Row::sum_abs, false))
+                ));
+                cells.push(format!(
+                    "{:.1} %",
+                    reduction(sum(Row::sigma, true), sum(Row::sigma, false))
+                ));
+                outln!("{}", line(cells));
+            }
+            if groups.len() > 1 {
+                outln!(
+                    "\nAll objects: Σ|τ| {:.1} % less, σ {:.1} % less.",
+                    reduction(sb, sa),
+                    reduction(qb, qa)
                 );
             }
-            println!(
-                "| **overall** | reduction | {}| {:.1} % | {:.1} % |",
-                "| ".repeat(joints.len()),
-                reduction(sb, sa),
-                reduction(qb, qa)
-            );
             for r in &rows {
                 if let Some(n) = &r.baseline_note {
-                    println!("\n{}: {n}", r.name);
+                    outln!("\n{}: {n}", r.name);
                 }
             }
         }

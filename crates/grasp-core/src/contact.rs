@@ -31,14 +31,23 @@ pub enum ContactModel {
     },
 }
 
+/// Smallest and largest tangential friction coefficient accepted. Beyond them the
+/// cones are so narrow or so wide that the answer is set by rounding, not by friction.
+pub const MU_RANGE: (f64, f64) = (1e-3, 1e3);
+/// Smallest and largest torsional friction coefficient accepted (a length, in the
+/// problem's unit).
+pub const MU_TORSION_RANGE: (f64, f64) = (1e-9, 1e9);
+
 /// A contact model with an unusable coefficient.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{field} must be a finite number > 0, got {value}")]
+#[error("{field} must be a number from {:e} to {:e}, got {value}", range.0, range.1)]
 pub struct ContactError {
     /// `"mu"` or `"mu_torsion"`.
     pub field: &'static str,
     /// The rejected value.
     pub value: f64,
+    /// The accepted range.
+    pub range: (f64, f64),
 }
 
 impl ContactModel {
@@ -69,21 +78,25 @@ impl ContactModel {
         }
     }
 
-    /// Checks that every coefficient is finite and positive.
+    /// Checks every coefficient against [`MU_RANGE`] and [`MU_TORSION_RANGE`].
     pub fn validate(&self) -> Result<(), ContactError> {
-        let check = |field, value: f64| {
-            if value.is_finite() && value > 0.0 {
+        let check = |field, value: f64, range: (f64, f64)| {
+            if (range.0..=range.1).contains(&value) {
                 Ok(())
             } else {
-                Err(ContactError { field, value })
+                Err(ContactError {
+                    field,
+                    value,
+                    range,
+                })
             }
         };
         match *self {
             Self::Fpc => Ok(()),
-            Self::Pcwf { mu } => check("mu", mu),
+            Self::Pcwf { mu } => check("mu", mu, MU_RANGE),
             Self::SfcLinear { mu, mu_torsion } | Self::SfcElliptic { mu, mu_torsion } => {
-                check("mu", mu)?;
-                check("mu_torsion", mu_torsion)
+                check("mu", mu, MU_RANGE)?;
+                check("mu_torsion", mu_torsion, MU_TORSION_RANGE)
             }
         }
     }
@@ -148,6 +161,7 @@ mod tests {
     #[test]
     fn validation_rejects_bad_coefficients() {
         assert!(ContactModel::Pcwf { mu: 0.0 }.validate().is_err());
+        assert!(ContactModel::Pcwf { mu: 5e-324 }.validate().is_err());
         assert!(ContactModel::SfcLinear {
             mu: 0.5,
             mu_torsion: f64::NAN

@@ -133,6 +133,10 @@ pub struct GraspModel {
     pub wrench_scale: [f64; 6],
     /// The row equilibration of the torque rows of A, likewise.
     pub torque_scale: Vec<f64>,
+    /// Per force component, the length that turns it into a force: `mu_torsion` for
+    /// `mz`, 1 otherwise. `|f_j| / force_unit_j` is in force units whatever the
+    /// assumption, which makes the residual check unit-invariant.
+    pub force_unit: Vec<f64>,
 }
 
 impl GraspModel {
@@ -144,20 +148,23 @@ impl GraspModel {
         let (n, m) = (p.force_dim(), p.joints());
         let a = p.grasp_matrix.vstack(&p.jacobian_transpose);
         // Column metric D: mz counts as mz/mu_torsion in the compliance metric.
-        let mut dinv = vec![1.0; n];
+        let mut force_unit = vec![1.0; n];
         let mut offsets = Vec::with_capacity(p.contacts.len());
         let mut off = 0;
         for c in &p.contacts {
             offsets.push(off);
-            if p.internal_forces == InternalForces::Compliance {
-                if let ContactModel::SfcLinear { mu_torsion, .. }
-                | ContactModel::SfcElliptic { mu_torsion, .. } = *c
-                {
-                    dinv[off + 3] = mu_torsion;
-                }
+            if let ContactModel::SfcLinear { mu_torsion, .. }
+            | ContactModel::SfcElliptic { mu_torsion, .. } = *c
+            {
+                force_unit[off + 3] = mu_torsion;
             }
             off += c.dim();
         }
+        let dinv = if p.internal_forces == InternalForces::Compliance {
+            force_unit.clone()
+        } else {
+            vec![1.0; n]
+        };
         // Row equilibration R: it leaves the range condition and the least-norm force of
         // a consistent [w; τ] unchanged, and makes the rank decision unit-free. The
         // paper's plain A⁺ (`euclidean`, and the paper model's least squares, which
@@ -251,6 +258,7 @@ impl GraspModel {
             unreachable,
             wrench_scale,
             torque_scale: r[6..].to_vec(),
+            force_unit,
         })
     }
 
@@ -309,6 +317,23 @@ impl GraspModel {
             }
             *o = v;
         }
+    }
+
+    /// `Σ_j |a_j| · (|Z1| |w| + |Z2| |τ| + |N| |ξ|)_j`: the size of the terms behind
+    /// `a · f`, which bounds the rounding of `f = Z1 w + Z2 τ + N ξ` seen through `a`.
+    pub fn force_terms_dot(&self, a: &[f64], w: &[f64; 6], tau: &[f64], xi: &[f64]) -> f64 {
+        let abs_dot =
+            |x: &[f64], y: &[f64]| -> f64 { x.iter().zip(y).map(|(p, q)| (p * q).abs()).sum() };
+        (0..self.force_dim())
+            .filter(|&j| a[j] != 0.0)
+            .map(|j| {
+                let mut t = abs_dot(self.z1.row(j), w) + abs_dot(self.z2.row(j), tau);
+                if !xi.is_empty() {
+                    t += abs_dot(self.passive_basis.row(j), xi);
+                }
+                a[j].abs() * t
+            })
+            .sum()
     }
 
     /// The wrench in equilibrated units: `w_i · wrench_scale_i`.

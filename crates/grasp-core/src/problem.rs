@@ -6,9 +6,29 @@ use crate::error::ProblemError;
 use crate::matrix::Matrix;
 use crate::model::InternalForces;
 
-/// Most inequality rows a problem may have: H is dense, so this bounds its memory
-/// (about 8 bytes × rows × joints, plus S: rows × force components).
+/// Most inequality rows a problem may have.
 pub const MAX_ROWS: usize = 1 << 20;
+
+/// Most numbers in the dense row matrices (H, S Z1 and S): rows × (joints + 6 + force
+/// components), 256 MiB of `f64`.
+pub const MAX_MATRIX_ENTRIES: usize = 1 << 25;
+
+/// Most joints (rows of Jᵀ). The model's decomposition is dense and cubic in size: at
+/// the limits it takes about a second.
+pub const MAX_JOINTS: usize = 256;
+
+/// Most contacts.
+pub const MAX_CONTACTS: usize = 256;
+
+/// Most contact force components (columns of G).
+pub const MAX_FORCE_COMPONENTS: usize = 1024;
+
+/// Largest magnitude of any number in G, Jᵀ, the wrench, torque limits, minimum
+/// normal forces and geometry. Results are unit-invariant within it.
+pub const MAX_MAGNITUDE: f64 = 1e12;
+
+/// Smallest and largest torque weight.
+pub const WEIGHT_RANGE: (f64, f64) = (1e-12, 1e12);
 
 /// Largest ratio between two torque weights. The native solver works in `√w_j τ_j`;
 /// beyond this the consistency equalities lose accuracy in those coordinates
@@ -87,7 +107,9 @@ impl GraspProblem {
         self.grasp_matrix.ncols()
     }
 
-    /// Checks every dimension and value, naming the first field at fault.
+    /// Checks every dimension and value against the input domain (the constants of
+    /// this module), naming the first field at fault, its value and the allowed range.
+    /// Sizes are checked before anything proportional to them is allocated.
     pub fn validate(&self) -> Result<(), ProblemError> {
         let g = &self.grasp_matrix;
         if g.nrows() != 6 {
@@ -105,7 +127,13 @@ impl GraspProblem {
                 "none",
             ));
         }
-        finite_matrix("grasp_matrix", g)?;
+        if n > MAX_FORCE_COMPONENTS {
+            return Err(ProblemError::invalid(
+                "grasp_matrix",
+                format!("at most {MAX_FORCE_COMPONENTS} columns (force components)"),
+                format!("{n} columns"),
+            ));
+        }
         if self.contacts.is_empty() {
             return Err(ProblemError::invalid(
                 "contacts",
@@ -113,11 +141,35 @@ impl GraspProblem {
                 "an empty list",
             ));
         }
+        if self.contacts.len() > MAX_CONTACTS {
+            return Err(ProblemError::invalid(
+                "contacts",
+                format!("at most {MAX_CONTACTS} contacts"),
+                format!("{} contacts", self.contacts.len()),
+            ));
+        }
+        let jt = &self.jacobian_transpose;
+        let m = jt.nrows();
+        if m == 0 {
+            return Err(ProblemError::invalid(
+                "jacobian_transpose",
+                "at least one joint row",
+                "none",
+            ));
+        }
+        if m > MAX_JOINTS {
+            return Err(ProblemError::invalid(
+                "jacobian_transpose",
+                format!("at most {MAX_JOINTS} joint rows"),
+                format!("{m} rows"),
+            ));
+        }
+        bounded_matrix("grasp_matrix", g)?;
         for (i, c) in self.contacts.iter().enumerate() {
             c.validate().map_err(|e| {
                 ProblemError::invalid(
                     format!("contacts[{i}].{}", e.field),
-                    "a finite number > 0",
+                    format!("a number from {:e} to {:e}", e.range.0, e.range.1),
                     e.value,
                 )
             })?;
@@ -130,14 +182,6 @@ impl GraspProblem {
                 format!("{dims} components"),
             ));
         }
-        let jt = &self.jacobian_transpose;
-        if jt.nrows() == 0 {
-            return Err(ProblemError::invalid(
-                "jacobian_transpose",
-                "at least one joint row",
-                "none",
-            ));
-        }
         if jt.ncols() != n {
             return Err(ProblemError::invalid(
                 "jacobian_transpose",
@@ -145,15 +189,9 @@ impl GraspProblem {
                 format!("rows of {}", jt.ncols()),
             ));
         }
-        finite_matrix("jacobian_transpose", jt)?;
-        for (j, v) in self.wrench.iter().enumerate() {
-            if !v.is_finite() {
-                return Err(ProblemError::invalid(
-                    format!("wrench[{j}]"),
-                    "a finite number",
-                    v,
-                ));
-            }
+        bounded_matrix("jacobian_transpose", jt)?;
+        for (j, &v) in self.wrench.iter().enumerate() {
+            bounded(&format!("wrench[{j}]"), v)?;
         }
         self.linearization
             .validate()
@@ -163,24 +201,26 @@ impl GraspProblem {
             .iter()
             .map(|c| self.linearization.rows_for(c))
             .sum();
-        if rows > MAX_ROWS {
+        // H is dense: rows × (joints + 6 + force components) numbers.
+        if rows > MAX_ROWS || rows * (m + 6 + n) > MAX_MATRIX_ENTRIES {
             return Err(ProblemError::invalid(
                 "linearization",
-                format!("at most {MAX_ROWS} cone rows in all (fewer sides or latitudes)"),
+                format!(
+                    "at most {MAX_ROWS} cone rows, and rows × (joints + 6 + force components) at most {MAX_MATRIX_ENTRIES} (fewer sides or latitudes)"
+                ),
                 format!(
                     "{rows} rows for N = {}, K = {}",
                     self.linearization.sides, self.linearization.latitudes
                 ),
             ));
         }
-        let m = jt.nrows();
         if let Some(w) = &self.torque_weights {
             per_joint("torque_weights", w.len(), m)?;
             for (j, &v) in w.iter().enumerate() {
-                if !(v.is_finite() && v > 0.0) {
+                if !(WEIGHT_RANGE.0..=WEIGHT_RANGE.1).contains(&v) {
                     return Err(ProblemError::invalid(
                         format!("torque_weights[{j}]"),
-                        "a finite number > 0",
+                        format!("a number from {:e} to {:e}", WEIGHT_RANGE.0, WEIGHT_RANGE.1),
                         v,
                     ));
                 }
@@ -205,10 +245,12 @@ impl GraspProblem {
             per_joint("torque_limits", l.len(), m)?;
             for (j, v) in l.iter().enumerate() {
                 if let Some(v) = *v {
-                    if !(v.is_finite() && v > 0.0) {
+                    if !(v > 0.0 && v <= MAX_MAGNITUDE) {
                         return Err(ProblemError::invalid(
                             format!("torque_limits[{j}]"),
-                            "a finite number > 0, or null for no limit",
+                            format!(
+                                "a number > 0 and at most {MAX_MAGNITUDE:e}, or null for no limit"
+                            ),
                             v,
                         ));
                     }
@@ -224,10 +266,10 @@ impl GraspProblem {
                 ));
             }
             for (i, &v) in f.iter().enumerate() {
-                if !(v.is_finite() && v >= 0.0) {
+                if !(0.0..=MAX_MAGNITUDE).contains(&v) {
                     return Err(ProblemError::invalid(
                         format!("min_normal_force[{i}]"),
-                        "a finite number ≥ 0",
+                        format!("a number from 0 to {MAX_MAGNITUDE:e}"),
                         v,
                     ));
                 }
@@ -249,16 +291,23 @@ impl GraspProblem {
     }
 }
 
-fn finite_matrix(name: &str, a: &Matrix) -> Result<(), ProblemError> {
+/// A number within the input domain's magnitude, or an error naming `field`.
+pub fn bounded(field: &str, v: f64) -> Result<(), ProblemError> {
+    if v.abs() <= MAX_MAGNITUDE {
+        Ok(())
+    } else {
+        Err(ProblemError::invalid(
+            field,
+            format!("a finite number of magnitude at most {MAX_MAGNITUDE:e}"),
+            v,
+        ))
+    }
+}
+
+fn bounded_matrix(name: &str, a: &Matrix) -> Result<(), ProblemError> {
     for i in 0..a.nrows() {
-        for (j, v) in a.row(i).iter().enumerate() {
-            if !v.is_finite() {
-                return Err(ProblemError::invalid(
-                    format!("{name}[{i}][{j}]"),
-                    "a finite number",
-                    v,
-                ));
-            }
+        for (j, &v) in a.row(i).iter().enumerate() {
+            bounded(&format!("{name}[{i}][{j}]"), v)?;
         }
     }
     Ok(())

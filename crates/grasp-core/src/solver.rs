@@ -150,6 +150,11 @@ pub struct Diagnostics {
     pub friction_margins: Vec<Option<f64>>,
     /// The relative tolerance of the final residual check.
     pub check_tolerance: f64,
+    /// The largest `|G_i f − w_i|` as a fraction of the check's bound for its row:
+    /// at most 1 means the object is held to the backend's accuracy.
+    pub wrench_check: f64,
+    /// The same for `Jᵀ f = τ`.
+    pub torque_check: f64,
 }
 
 /// `v > limit`, or not a number.
@@ -401,6 +406,8 @@ impl TorqueQp {
             d.consistency_residual = 0.0;
             d.max_violation = 0.0;
             d.cone_violation = 0.0;
+            d.wrench_check = 0.0;
+            d.torque_check = 0.0;
             return;
         }
         let tau = &out.torque;
@@ -412,37 +419,53 @@ impl TorqueQp {
             .zip(&model.weights)
             .map(|(t, wj)| wj * t * t)
             .sum();
-        // Backward-error scales: a residual is judged against the size of the terms
-        // that make it up, so the check is the same in any units.
-        // Plus a floor: the size of [w; τ] in equilibrated units, which bounds the
-        // rounding of f = Z [w; τ].
-        let floor = tau
+        // Residuals are judged against the problem's own scale, so the check is the
+        // same in any units: the largest contact force F (with mz counted as
+        // mz/mu_torsion), seen through the row (Σ_j |a_j| · force_unit_j · F), plus the
+        // row's own right-hand side. Two floors: the wrench component the rank decision
+        // let through, and the rounding of f = Z1 w + Z2 τ + N ξ itself (computed only
+        // for a row that fails without it).
+        let fmax = f
             .iter()
-            .zip(&model.torque_scale)
-            .map(|(t, r)| (t * r).abs())
-            .fold(norm_inf(&model.scaled_wrench(w)), f64::max);
-        let (mut wres, mut wbad) = (0.0f64, false);
+            .zip(&model.force_unit)
+            .fold(0.0f64, |a, (v, u)| a.max((v / u).abs()));
+        let through = |row: &[f64]| -> f64 {
+            row.iter()
+                .zip(&model.force_unit)
+                .map(|(a, u)| (a * u).abs())
+                .sum::<f64>()
+                * fmax
+        };
+        let admitted = 10.0 * model.rank_tolerance * norm_inf(&model.scaled_wrench(w));
+        let rounding = 1e3 * f64::EPSILON * (6 + model.joints() + model.passive_dim()) as f64;
+        let (mut wres, mut wbad, mut wratio) = (0.0f64, false, 0.0f64);
         for i in 0..6 {
             let row = model.grasp_matrix.row(i);
             let r = (dot(row, f) - w[i]).abs();
-            let scale = row.iter().zip(f).map(|(a, b)| (a * b).abs()).sum::<f64>()
-                + w[i].abs()
-                + floor / model.wrench_scale[i];
             wres = wres.max(r);
-            wbad |= exceeds(r, tol * scale);
+            let mut bound = tol * (w[i].abs() + through(row)) + admitted / model.wrench_scale[i];
+            if exceeds(r, bound) {
+                bound += rounding * model.force_terms_dot(row, w, tau, &out.internal_forces);
+                wbad |= exceeds(r, bound);
+            }
+            wratio = wratio.max(r / bound.max(f64::MIN_POSITIVE));
         }
-        let (mut tres, mut tbad) = (0.0f64, false);
+        let (mut tres, mut tbad, mut tratio) = (0.0f64, false, 0.0f64);
         for (j, t) in tau.iter().enumerate() {
             let row = model.jacobian_transpose.row(j);
             let r = (dot(row, f) - t).abs();
-            let scale = row.iter().zip(f).map(|(a, b)| (a * b).abs()).sum::<f64>()
-                + t.abs()
-                + floor / model.torque_scale[j];
             tres = tres.max(r);
-            tbad |= exceeds(r, tol * scale);
+            let mut bound = tol * (t.abs() + through(row)) + admitted / model.torque_scale[j];
+            if exceeds(r, bound) {
+                bound += rounding * model.force_terms_dot(row, w, tau, &out.internal_forces);
+                tbad |= exceeds(r, bound);
+            }
+            tratio = tratio.max(r / bound.max(f64::MIN_POSITIVE));
         }
         d.wrench_residual = wres;
         d.torque_residual = tres;
+        d.wrench_check = wratio;
+        d.torque_check = tratio;
         d.consistency_residual = (0..model.equality_rows())
             .map(|i| (dot(model.eq.row(i), tau) + dot(model.eq_w.row(i), w)).abs())
             .fold(0.0, f64::max);
@@ -464,9 +487,8 @@ impl TorqueQp {
                 let i = c.first_row + k;
                 let (sf, abs) = self.row_on_force(ci, k, fc);
                 let v = self.c0[i] - sf;
-                let scale = abs + self.c0[i].abs() + fscale;
                 viol = viol.max(v);
-                vbad |= exceeds(v, tol * scale);
+                vbad |= exceeds(v, tol * (abs + self.c0[i].abs() + fscale));
             }
         }
         for (i, id) in self.rows.iter().enumerate() {

@@ -90,7 +90,7 @@ impl ContactSpec {
         model.validate().map_err(|e| {
             ProblemError::invalid(
                 format!("{field}.{}", e.field),
-                "a finite number > 0",
+                format!("a number from {:e} to {:e}", e.range.0, e.range.1),
                 e.value,
             )
         })?;
@@ -358,12 +358,39 @@ fn kind_of(v: &serde_json::Value) -> &'static str {
     }
 }
 
-/// Reads and parses a problem file.
-pub fn load_problem(path: impl AsRef<Path>) -> Result<GraspProblem, ProblemError> {
-    let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|error| ProblemError::Io {
+/// Largest problem file read, in bytes (64 MiB): far above any grasp within the size
+/// limits, and it stops an endless input (`/dev/zero`) at once.
+pub const MAX_FILE_BYTES: u64 = 64 << 20;
+
+/// Reads at most [`MAX_FILE_BYTES`] of UTF-8 text from `path`.
+pub fn read_limited(path: &Path) -> Result<String, ProblemError> {
+    use std::io::Read;
+    let io = |error| ProblemError::Io {
         path: path.display().to_string(),
         error,
-    })?;
-    parse_problem(&text)
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let mut bytes = Vec::new();
+    file.take(MAX_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(ProblemError::invalid(
+            "(input)",
+            format!("a problem file of at most {MAX_FILE_BYTES} bytes"),
+            "a larger input",
+        ));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        ProblemError::invalid(
+            "(input)",
+            "UTF-8 text (JSON)",
+            format!("invalid UTF-8 at byte {}", e.utf8_error().valid_up_to()),
+        )
+    })
+}
+
+/// Reads and parses a problem file.
+pub fn load_problem(path: impl AsRef<Path>) -> Result<GraspProblem, ProblemError> {
+    parse_problem(&read_limited(path.as_ref())?)
 }

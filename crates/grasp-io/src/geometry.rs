@@ -21,7 +21,7 @@ use crate::file::{ModelName, Options};
 use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
 use grasp_core::matrix::Matrix;
-use grasp_core::problem::GraspProblem;
+use grasp_core::problem::{GraspProblem, MAX_CONTACTS, MAX_JOINTS, MAX_MAGNITUDE};
 use serde::{Deserialize, Serialize};
 
 /// How far from unit length an axis or normal may be.
@@ -170,10 +170,10 @@ fn label(kind: &str, i: usize, name: &Option<String>) -> String {
 }
 
 fn check_vec(field: String, v: [f64; 3], unit: bool) -> Result<(), ProblemError> {
-    if v.iter().any(|x| !x.is_finite()) {
+    if v.iter().any(|x| x.is_nan() || x.abs() > MAX_MAGNITUDE) {
         return Err(ProblemError::invalid(
             field,
-            "three finite numbers",
+            format!("three finite numbers of magnitude at most {MAX_MAGNITUDE:e}"),
             format!("{v:?}"),
         ));
     }
@@ -205,6 +205,21 @@ impl GeometryFile {
                 "fingers",
                 "at least one joint",
                 "none",
+            ));
+        }
+        // Sizes first: G and Jᵀ are allocated from them.
+        if m > MAX_JOINTS {
+            return Err(ProblemError::invalid(
+                "fingers",
+                format!("at most {MAX_JOINTS} joints in all"),
+                format!("{m} joints"),
+            ));
+        }
+        if self.contacts.len() > MAX_CONTACTS {
+            return Err(ProblemError::invalid(
+                "contacts",
+                format!("at most {MAX_CONTACTS} contacts"),
+                format!("{} contacts", self.contacts.len()),
             ));
         }
         for (k, f) in self.fingers.iter().enumerate() {

@@ -203,3 +203,43 @@ pub fn reference_geometry(geometry: &serde_json::Value) -> grasp_core::GraspProb
         serde_json::from_value(geometry.clone()).expect("a geometry-form problem");
     as_reference(geo.into_problem().expect("a valid problem"))
 }
+
+/// The same problem with lengths multiplied by `l` (m → mm: 1000) and forces by `f`
+/// (N → mN: 1000): the moment rows of G and the wrench, every row of Jᵀ (each torque
+/// scales by `l·f`, as for revolute joints), the `mz` columns, `mu_torsion`, the
+/// minimum normal forces and the torque limits. σ scales by `(l f)²` exactly.
+pub fn rescale(p: &grasp_core::GraspProblem, l: f64, f: f64) -> grasp_core::GraspProblem {
+    let mut q = p.clone();
+    let mut mz_cols = Vec::new();
+    let mut off = 0;
+    for c in &mut q.contacts {
+        if let grasp_core::ContactModel::SfcLinear { mu_torsion, .. }
+        | grasp_core::ContactModel::SfcElliptic { mu_torsion, .. } = c
+        {
+            *mu_torsion *= l;
+            mz_cols.push(off + 3);
+        }
+        off += c.dim();
+    }
+    let n = q.force_dim();
+    for j in 0..n {
+        let col = if mz_cols.contains(&j) { 1.0 / l } else { 1.0 };
+        for i in 0..6 {
+            let row = if i >= 3 { l } else { 1.0 };
+            q.grasp_matrix[(i, j)] *= row * col;
+        }
+        for i in 0..q.joints() {
+            q.jacobian_transpose[(i, j)] *= l * col;
+        }
+    }
+    for (i, w) in q.wrench.iter_mut().enumerate() {
+        *w *= f * if i >= 3 { l } else { 1.0 };
+    }
+    if let Some(fmin) = &mut q.min_normal_force {
+        fmin.iter_mut().for_each(|v| *v *= f);
+    }
+    if let Some(lim) = &mut q.torque_limits {
+        lim.iter_mut().flatten().for_each(|v| *v *= l * f);
+    }
+    q
+}

@@ -5,10 +5,10 @@
 //! finger).
 #![cfg(all(feature = "active-set", feature = "clarabel"))]
 
-use grasp_testkit::{synthetic_grasp, ModelMix, SynthSpec};
+use grasp_testkit::{rescale, synthetic_grasp, ModelMix, SynthSpec};
 use grasp_torque::file::ModelName;
 use grasp_torque::{
-    inscribed_cone, solve, Backend, ConeRepr, Constraints, ContactModel, GraspModel, GraspProblem,
+    inscribed_cone, solve, Backend, ConeRepr, Constraints, GraspModel, GraspProblem,
     InternalForces, Linearization, Solution, SolverConfig, Status, TorqueQp, WarmStart,
 };
 use proptest::prelude::*;
@@ -31,44 +31,6 @@ fn run(p: &GraspProblem, backend: Backend, exact: bool) -> Solution {
 
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
-}
-
-/// The same problem with lengths multiplied by `l` (m → mm: 1000) and forces by `f`
-/// (N → mN: 1000). Every joint here is revolute, so each torque scales by `l·f`.
-fn rescale(p: &GraspProblem, l: f64, f: f64) -> GraspProblem {
-    let mut q = p.clone();
-    let mut mz_cols = Vec::new();
-    let mut off = 0;
-    for c in &mut q.contacts {
-        if let ContactModel::SfcLinear { mu_torsion, .. }
-        | ContactModel::SfcElliptic { mu_torsion, .. } = c
-        {
-            *mu_torsion *= l;
-            mz_cols.push(off + 3);
-        }
-        off += c.dim();
-    }
-    let n = q.force_dim();
-    for j in 0..n {
-        let col = if mz_cols.contains(&j) { 1.0 / l } else { 1.0 };
-        for i in 0..6 {
-            let row = if i >= 3 { l } else { 1.0 };
-            q.grasp_matrix[(i, j)] *= row * col;
-        }
-        for i in 0..q.joints() {
-            q.jacobian_transpose[(i, j)] *= l * col;
-        }
-    }
-    for (i, w) in q.wrench.iter_mut().enumerate() {
-        *w *= f * if i >= 3 { l } else { 1.0 };
-    }
-    if let Some(fmin) = &mut q.min_normal_force {
-        fmin.iter_mut().for_each(|v| *v *= f);
-    }
-    if let Some(lim) = &mut q.torque_limits {
-        lim.iter_mut().flatten().for_each(|v| *v *= l * f);
-    }
-    q
 }
 
 /// A synthetic grasp; with `null_space`, four soft fingers of two joints each, so that
