@@ -191,11 +191,20 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
             outln!("{}", serde_json::to_string_pretty(&out)?);
         }
         Format::Text => {
+            // K (SFCe latitudes) matters only with SFCe contacts.
+            let sfce = p
+                .contacts
+                .iter()
+                .any(|c| matches!(c, grasp_torque::ContactModel::SfcElliptic { .. }));
+            let k = if sfce {
+                format!(", K = {}", p.linearization.latitudes)
+            } else {
+                String::new()
+            };
             outln!(
-                "problem {}  (N = {}, K = {})\n",
+                "problem {}  (inscribed cones: N = {}{k})\n",
                 args.problem.display(),
-                p.linearization.sides,
-                p.linearization.latitudes
+                p.linearization.sides
             );
             outln!(
                 "{:<11} {:<7} {:<18} {:>14} {:>12} {:>6} {:>11} {:>10} {:>10}",
@@ -230,7 +239,11 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
                     } else {
                         dash()
                     },
-                    if ok { g(min_margin(s), 3) } else { dash() },
+                    match (ok, min_margin(s)) {
+                        (true, Some(m)) => g(m, 3),
+                        (true, None) => "unloaded".into(),
+                        _ => dash(),
+                    },
                 );
             }
             outln!();
@@ -254,12 +267,12 @@ fn max_diff(a: &[f64], b: &[f64]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// The smallest margin of a loaded contact (1 when none is loaded).
-fn min_margin(s: &Solution) -> f64 {
+/// The smallest margin of a loaded contact (`None` when no contact is loaded).
+fn min_margin(s: &Solution) -> Option<f64> {
     s.diagnostics
         .friction_margins
         .iter()
         .flatten()
         .copied()
-        .fold(1.0, f64::min)
+        .reduce(f64::min)
 }

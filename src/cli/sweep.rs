@@ -6,6 +6,8 @@ use super::{load, Format, Spacing};
 use anyhow::{bail, Context, Result};
 use grasp_torque::sweep::{sweep, Sweep, SweepConfig};
 use grasp_torque::{Backend, SfceSpacing};
+use plotters::coord::combinators::WithKeyPoints;
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use serde_json::json;
 use std::io::Write;
@@ -229,22 +231,83 @@ fn min_max(v: &[f64]) -> (f64, f64) {
         })
 }
 
-/// One series over log-scaled N: a line, its points, and a legend entry.
+/// Tick positions for the N axis: the "nice" values inside the sweep, thinned to at
+/// most about 14, so that small N (3–9, where σ changes most) are labelled too.
+fn n_ticks(nmin: f64, nmax: f64) -> Vec<f64> {
+    let dense = [
+        3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 12.0, 14.0, 16.0, 20.0, 24.0, 32.0, 40.0, 48.0,
+        64.0, 96.0, 128.0, 192.0, 256.0, 384.0, 512.0, 1024.0, 2048.0, 4096.0,
+    ];
+    let sparse = [
+        3.0, 4.0, 6.0, 8.0, 12.0, 16.0, 24.0, 32.0, 48.0, 64.0, 128.0, 256.0, 512.0, 1024.0,
+        2048.0, 4096.0,
+    ];
+    let inside = |v: &[f64]| -> Vec<f64> {
+        v.iter()
+            .copied()
+            .filter(|x| (nmin..=nmax).contains(x))
+            .collect()
+    };
+    let d = inside(&dense);
+    if d.len() <= 14 {
+        d
+    } else {
+        inside(&sparse)
+    }
+}
+
+/// Decade ticks over `[lo, hi]` (with 2 and 5 between when the range is narrow), and
+/// the decade-aligned range they span.
+fn log_ticks(lo: f64, hi: f64) -> (f64, f64, Vec<f64>) {
+    let a = lo.log10().floor() as i32;
+    let b = (hi.log10().ceil() as i32).max(a + 1);
+    let mut t = Vec::new();
+    for e in a..=b {
+        let d = 10f64.powi(e);
+        t.push(d);
+        if b - a <= 2 && e < b {
+            t.push(2.0 * d);
+            t.push(5.0 * d);
+        }
+    }
+    (10f64.powi(a), 10f64.powi(b), t)
+}
+
+/// The series legend, framed, in a corner the panel leaves free.
+fn legend<'a, X: Ranged, Y: Ranged>(
+    c: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+    pos: SeriesLabelPosition,
+) -> DrawResult<()> {
+    c.configure_series_labels()
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .position(pos)
+        .draw()?;
+    Ok(())
+}
+
+/// One series over N: a line, its points, and a legend entry drawn the same way.
 fn line_with_points<'a, Y: Ranged<ValueType = f64>>(
-    c: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<LogCoord<f64>, Y>>,
+    c: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<WithKeyPoints<LogCoord<f64>>, Y>>,
     pts: Vec<(f64, f64)>,
     colour: RGBAColor,
     label: String,
 ) -> DrawResult<()> {
     c.draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))?
         .label(label)
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+        .legend(move |(x, y)| {
+            EmptyElement::at((x, y))
+                + PathElement::new(vec![(0, 0), (20, 0)], colour.stroke_width(2))
+                + Circle::new((10, 0), 3, colour.filled())
+        });
     c.draw_series(pts.into_iter().map(|p| Circle::new(p, 3, colour.filled())))?;
     Ok(())
 }
 
-/// Three panels over N (log scale): σ(N) with σ* as its asymptote; the relative gap
-/// (log scale); iterations (left axis) and median solve time (right axis).
+/// Three panels over N (log scale, every nice N labelled): σ(N) with σ* as its
+/// asymptote; the relative gap (log scale; zero gaps marked at the floor); iterations
+/// (left axis, integers) and median solve time (right axis). Each panel leaves its
+/// top free for the legend, so no legend covers data.
 fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
     let root = SVGBackend::new(path, (900, 1050)).into_drawing_area();
     root.fill(&WHITE)?;
@@ -252,11 +315,22 @@ fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
     let panels = root.split_evenly((3, 1));
     let nmin = s.rows.iter().map(|r| r.sides).min().unwrap_or(3) as f64;
     let nmax = (s.rows.iter().map(|r| r.sides).max().unwrap_or(4) as f64).max(nmin + 1.0);
+    let xs = || {
+        (nmin * 0.95..nmax * 1.05)
+            .log_scale()
+            .with_key_points(n_ticks(nmin, nmax))
+    };
     let mut ks: Vec<usize> = s.rows.iter().map(|r| r.latitudes).collect();
-    ks.dedup();
     ks.sort_unstable();
     ks.dedup();
     let colour = |i: usize| Palette99::pick(i).to_rgba();
+    let name = |k: usize| {
+        if ks.len() > 1 {
+            format!(", K = {k}")
+        } else {
+            String::new()
+        }
+    };
     let series =
         |k: usize, f: &dyn Fn(&grasp_torque::sweep::SweepRow) -> Option<f64>| -> Vec<(f64, f64)> {
             s.rows
@@ -266,7 +340,7 @@ fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
                 .collect()
         };
 
-    // Panel 1: σ(N) and σ*.
+    // Panel 1: σ(N) and σ*; the top third is left for the legend.
     let objs: Vec<f64> = s
         .rows
         .iter()
@@ -275,64 +349,69 @@ fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
         .collect();
     let (lo, hi) = min_max(&objs);
     let pad = ((hi - lo) * 0.08).max(hi.abs() * 1e-3).max(1e-12);
+    let top = hi + pad + (hi - lo + 2.0 * pad) * 0.5;
     let mut c = ChartBuilder::on(&panels[0])
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(80)
         .caption(
-            "σ(N) = Σ τ² with N-sided inscribed cones; dashed: exact-cone optimum σ*",
+            "σ(N) = Σ τ² with N-sided inscribed cones, and the exact-cone optimum σ*",
             ("sans-serif", 16),
         )
-        .build_cartesian_2d((nmin..nmax).log_scale(), (lo - pad)..(hi + pad))?;
+        .build_cartesian_2d(xs(), (lo - pad)..top)?;
     c.configure_mesh()
         .x_desc("N (sides)")
         .y_desc("σ")
         .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| g(*v, 5))
         .draw()?;
     for (i, &k) in ks.iter().enumerate() {
         line_with_points(
             &mut c,
             series(k, &|r| r.objective),
             colour(i),
-            format!("σ(N), K = {k}"),
+            format!("σ(N){}", name(k)),
         )?;
     }
     if let Some(e) = s.exact_objective {
         c.draw_series(DashedLineSeries::new(
-            vec![(nmin, e), (nmax, e)],
+            vec![(nmin * 0.95, e), (nmax * 1.05, e)],
             8,
             5,
             BLACK.stroke_width(2),
         ))?
-        .label(format!("σ* = {}", g(e, 8)))
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
+        .label(format!("σ* = {} (exact cones)", g(e, 8)))
+        .legend(|(x, y)| {
+            DashedPathElement::new(vec![(x, y), (x + 20, y)], 5, 3, BLACK.stroke_width(2))
+        });
     }
-    c.configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()?;
+    legend(&mut c, SeriesLabelPosition::UpperRight)?;
 
-    // Panel 2: relative gap, log scale.
+    // Panel 2: relative gap, log scale over whole decades; zero gaps at the floor.
     let gaps: Vec<f64> = s
         .rows
         .iter()
         .filter_map(|r| r.gap)
         .filter(|&g| g > 0.0)
         .collect();
+    let zeros: Vec<(usize, f64)> = s
+        .rows
+        .iter()
+        .filter(|r| r.gap == Some(0.0))
+        .map(|r| (r.latitudes, r.sides as f64))
+        .collect();
     if !gaps.is_empty() {
         let (glo, ghi) = min_max(&gaps);
+        let (ylo, yhi, ticks) = log_ticks(glo, ghi * 10.0);
         let mut c = ChartBuilder::on(&panels[1])
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(80)
             .caption(
-                "relative gap (σ(N) − σ*)/σ*  (zero gaps not drawn on the log scale)",
+                "relative gap (σ(N) − σ*)/σ*; hollow markers on the floor: gap 0 (N-gon vertex at the optimum)",
                 ("sans-serif", 16),
             )
-            .build_cartesian_2d(
-                (nmin..nmax).log_scale(),
-                ((glo / 2.0)..(ghi * 2.0)).log_scale(),
-            )?;
+            .build_cartesian_2d(xs(), (ylo..yhi).log_scale().with_key_points(ticks))?;
         c.configure_mesh()
             .x_desc("N (sides)")
             .y_desc("gap")
@@ -344,15 +423,26 @@ fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
                 .into_iter()
                 .filter(|p| p.1 > 0.0)
                 .collect();
-            line_with_points(&mut c, pts, colour(i), format!("K = {k}"))?;
+            line_with_points(&mut c, pts, colour(i), format!("gap{}", name(k)))?;
+            let at_floor: Vec<(f64, f64)> = zeros
+                .iter()
+                .filter(|z| z.0 == k)
+                .map(|z| (z.1, ylo))
+                .collect();
+            if !at_floor.is_empty() {
+                c.draw_series(
+                    at_floor
+                        .into_iter()
+                        .map(|p| Circle::new(p, 5, colour(i).stroke_width(2))),
+                )?
+                .label(format!("gap 0{}", name(k)))
+                .legend(move |(x, y)| Circle::new((x + 10, y), 5, colour(i).stroke_width(2)));
+            }
         }
-        c.configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()?;
+        legend(&mut c, SeriesLabelPosition::UpperRight)?;
     }
 
-    // Panel 3: iterations and time.
+    // Panel 3: iterations (integers) and time; the top is left for the legend.
     let imax = s
         .rows
         .iter()
@@ -373,25 +463,35 @@ fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
         .right_y_label_area_size(80)
         .caption(
             format!(
-                "iterations (solid, left) and median solve time over {} solves (dashed, right)",
+                "iterations (solid, left) and median solve time of {} solves (dashed, right)",
                 s.repeats
             ),
             ("sans-serif", 16),
         )
-        .build_cartesian_2d((nmin..nmax).log_scale(), 0.0..imax * 1.1)?
-        .set_secondary_coord((nmin..nmax).log_scale(), 0.0..tmax * 1.1);
+        .build_cartesian_2d(xs(), 0.0..imax * 1.8)?
+        .set_secondary_coord(xs(), 0.0..tmax * 1.8);
     c.configure_mesh()
         .x_desc("N (sides)")
         .y_desc("iterations")
         .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| {
+            if v.fract() == 0.0 {
+                format!("{v:.0}")
+            } else {
+                String::new()
+            }
+        })
         .draw()?;
-    c.configure_secondary_axes().y_desc("time (µs)").draw()?;
+    c.configure_secondary_axes()
+        .y_desc("time (µs)")
+        .y_label_formatter(&|v| g(*v, 3))
+        .draw()?;
     for (i, &k) in ks.iter().enumerate() {
         c.draw_series(LineSeries::new(
             series(k, &|r| Some(r.iterations as f64)),
             colour(i).stroke_width(2),
         ))?
-        .label(format!("iterations, K = {k}"))
+        .label(format!("iterations{}", name(k)))
         .legend(move |(x, y)| {
             PathElement::new(vec![(x, y), (x + 20, y)], colour(i).stroke_width(2))
         });
@@ -401,16 +501,12 @@ fn plot(path: &Path, title: &str, s: &Sweep) -> DrawResult<()> {
             4,
             colour(i).stroke_width(2),
         ))?
-        .label(format!("time µs, K = {k}"))
+        .label(format!("time µs{}", name(k)))
         .legend(move |(x, y)| {
-            PathElement::new(vec![(x, y), (x + 20, y)], colour(i).stroke_width(1))
+            DashedPathElement::new(vec![(x, y), (x + 20, y)], 5, 3, colour(i).stroke_width(2))
         });
     }
-    c.configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()?;
+    legend(&mut c, SeriesLabelPosition::UpperLeft)?;
     root.present()?;
     Ok(())
 }
