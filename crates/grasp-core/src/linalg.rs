@@ -1,10 +1,14 @@
-//! Decompositions on [`Matrix`], through `faer`.
+//! The singular value decomposition, by one-sided Jacobi rotations.
 //!
-//! faer was chosen over nalgebra for the SVD. nalgebra's is about 2× faster at grasp
-//! sizes, but on some grasp matrices its factors reconstruct A only to ~1e-9, which
-//! shows up as `‖G f − w‖∞ ≈ 1e-8` instead of rounding level. faer's full SVD is
-//! accurate to rounding and directly gives the complement of range(A) that the
-//! consistency equalities need (`cargo bench --bench decomposition`, docs/benchmarks.md).
+//! Grasp matrices are small (at most 262 × 1024 within the input domain) and the model
+//! needs the *full* decomposition: V's trailing columns span the passive internal
+//! forces, U's the complement of the range that the consistency equalities come from.
+//! One-sided Jacobi (Hestenes) orthogonalises the columns of the shorter side by plane
+//! rotations until every pair is orthogonal to rounding. It is simple, it allocates
+//! only its result, and it is accurate: singular values to high relative accuracy and
+//! factors that reconstruct A to rounding (the reason faer's SVD was preferred over
+//! nalgebra's earlier; `cargo bench -p grasp-torque --bench decomposition` compares).
+//! Dropping faer also removed the largest part of the build.
 
 use crate::matrix::Matrix;
 
@@ -59,6 +63,104 @@ pub struct SvdError {
     pub cols: usize,
 }
 
+/// Sweeps before giving up; convergence is quadratic and takes 6–12 at grasp sizes.
+const MAX_SWEEPS: usize = 80;
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// One-sided Jacobi on the columns of `cols` (each of length `len`): rotates pairs
+/// until they are orthogonal, applying the same rotations to the columns of `w`.
+/// Columns whose squared norm is at most `negligible` are numerically zero: rotating
+/// them only stirs rounding, so they are left alone (and later completed).
+fn orthogonalise(cols: &mut [Vec<f64>], w: &mut [Vec<f64>], negligible: f64) -> bool {
+    let n = cols.len();
+    let len = cols.first().map_or(0, Vec::len);
+    let tol = f64::EPSILON * (len.max(1) as f64).sqrt();
+    for _ in 0..MAX_SWEEPS {
+        let mut rotated = false;
+        for i in 0..n {
+            for j in i + 1..n {
+                let (a, b) = {
+                    let (l, r) = cols.split_at(j);
+                    (&l[i], &r[0])
+                };
+                let alpha = dot(a, a);
+                let beta = dot(b, b);
+                let gamma = dot(a, b);
+                if gamma == 0.0
+                    || alpha <= negligible
+                    || beta <= negligible
+                    || gamma.abs() <= tol * (alpha * beta).sqrt()
+                {
+                    continue;
+                }
+                rotated = true;
+                let zeta = (beta - alpha) / (2.0 * gamma);
+                let t = zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt());
+                let c = 1.0 / (1.0 + t * t).sqrt();
+                let s = c * t;
+                for m in [&mut *cols, &mut *w] {
+                    let (l, r) = m.split_at_mut(j);
+                    for (x, y) in l[i].iter_mut().zip(r[0].iter_mut()) {
+                        let (p, q) = (*x, *y);
+                        *x = c * p - s * q;
+                        *y = s * p + c * q;
+                    }
+                }
+            }
+        }
+        if !rotated {
+            return true;
+        }
+    }
+    false
+}
+
+/// Completes orthonormal columns `q` (each of length `len`) to an orthonormal basis,
+/// by Householder reflections: the new columns span their orthogonal complement.
+fn complete(q: &[Vec<f64>], len: usize) -> Vec<Vec<f64>> {
+    let k = q.len();
+    // Householder QR of the len × k matrix [q]: H_1 … H_k [q] = [R; 0].
+    let mut a: Vec<Vec<f64>> = q.to_vec();
+    let mut vs: Vec<Vec<f64>> = Vec::with_capacity(k);
+    for c in 0..k {
+        let x = &a[c][c..];
+        let norm = dot(x, x).sqrt();
+        let mut v = x.to_vec();
+        v[0] += if x[0] >= 0.0 { norm } else { -norm };
+        let vn = dot(&v, &v);
+        if vn > 0.0 {
+            for col in a.iter_mut().skip(c) {
+                let f = 2.0 * dot(&v, &col[c..]) / vn;
+                for (y, vi) in col[c..].iter_mut().zip(&v) {
+                    *y -= f * vi;
+                }
+            }
+        }
+        vs.push(v);
+    }
+    // Q = H_1 … H_k; its columns k.. span the complement.
+    (k..len)
+        .map(|e| {
+            let mut y = vec![0.0; len];
+            y[e] = 1.0;
+            for c in (0..k).rev() {
+                let v = &vs[c];
+                let vn = dot(v, v);
+                if vn > 0.0 {
+                    let f = 2.0 * dot(v, &y[c..]) / vn;
+                    for (yi, vi) in y[c..].iter_mut().zip(v) {
+                        *yi -= f * vi;
+                    }
+                }
+            }
+            y
+        })
+        .collect()
+}
+
 /// Full SVD of `a`. Empty matrices give empty factors.
 pub fn svd(a: &Matrix) -> Result<Svd, SvdError> {
     let (rows, cols) = (a.nrows(), a.ncols());
@@ -69,19 +171,89 @@ pub fn svd(a: &Matrix) -> Result<Svd, SvdError> {
             v: Matrix::identity(cols),
         });
     }
-    let fa = faer::Mat::<f64>::from_fn(rows, cols, |i, j| a[(i, j)]);
-    let dec = fa.svd().map_err(|_| SvdError { rows, cols })?;
-    let (u, v, s) = (dec.U(), dec.V(), dec.S().column_vector());
-    Ok(Svd {
-        u: Matrix::from_fn(rows, rows, |i, j| u[(i, j)]),
-        s: (0..rows.min(cols)).map(|i| s[i]).collect(),
-        v: Matrix::from_fn(cols, cols, |i, j| v[(i, j)]),
-    })
+    if a.as_slice().iter().any(|x| !x.is_finite()) {
+        return Err(SvdError { rows, cols });
+    }
+    // Rotate the columns of the shorter side: M = A (tall) or Aᵀ (wide), so that
+    // M W = [σ_k x_k] with W orthogonal (k = min(rows, cols) columns).
+    let wide = rows < cols;
+    let (len, k) = if wide { (cols, rows) } else { (rows, cols) };
+    let mut m: Vec<Vec<f64>> = (0..k)
+        .map(|c| {
+            (0..len)
+                .map(|i| if wide { a[(c, i)] } else { a[(i, c)] })
+                .collect()
+        })
+        .collect();
+    let mut w: Vec<Vec<f64>> = (0..k)
+        .map(|c| (0..k).map(|i| if i == c { 1.0 } else { 0.0 }).collect())
+        .collect();
+    // Below ε·‖A‖_F (times √len) a column is rounding noise.
+    let fro = a.as_slice().iter().map(|x| x * x).sum::<f64>().sqrt();
+    let tiny = f64::EPSILON * fro * (len as f64).sqrt();
+    if !orthogonalise(&mut m, &mut w, tiny * tiny) {
+        return Err(SvdError { rows, cols });
+    }
+    let norms: Vec<f64> = m.iter().map(|c| dot(c, c).sqrt()).collect();
+    let mut order: Vec<usize> = (0..k).collect();
+    order.sort_by(|&x, &y| norms[y].total_cmp(&norms[x]));
+    let s: Vec<f64> = order.iter().map(|&c| norms[c]).collect();
+    // The long side's singular vectors: normalised columns where σ is above the
+    // noise, completed to an orthonormal basis.
+    let defined: Vec<Vec<f64>> = order
+        .iter()
+        .filter(|&&c| norms[c] > tiny && norms[c] > 1e-280)
+        .map(|&c| m[c].iter().map(|x| x / norms[c]).collect())
+        .collect();
+    let mut long = defined.clone();
+    long.extend(complete(&defined, len));
+    let short = |i: usize, j: usize| w[order[j]][i];
+    let longm = |i: usize, j: usize| long[j][i];
+    let (u, v) = if wide {
+        (
+            Matrix::from_fn(rows, rows, short),
+            Matrix::from_fn(cols, cols, longm),
+        )
+    } else {
+        (
+            Matrix::from_fn(rows, rows, longm),
+            Matrix::from_fn(cols, cols, short),
+        )
+    };
+    Ok(Svd { u, s, v })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn check(a: &Matrix) {
+        let d = svd(a).unwrap();
+        let (r, c) = (a.nrows(), a.ncols());
+        let eps = 1e-13 * a.max_abs().max(1.0);
+        // Orthogonal factors.
+        for (q, n) in [(&d.u, r), (&d.v, c)] {
+            let qtq = q.transpose().matmul(q);
+            for i in 0..n {
+                for j in 0..n {
+                    let want = if i == j { 1.0 } else { 0.0 };
+                    assert!((qtq[(i, j)] - want).abs() < 1e-13, "QᵀQ {i} {j}");
+                }
+            }
+        }
+        // A = U Σ Vᵀ.
+        let mut sig = Matrix::zeros(r, c);
+        for (i, &s) in d.s.iter().enumerate() {
+            sig[(i, i)] = s;
+        }
+        let back = d.u.matmul(&sig).matmul(&d.v.transpose());
+        for i in 0..r {
+            for j in 0..c {
+                assert!((back[(i, j)] - a[(i, j)]).abs() < eps, "{i} {j}");
+            }
+        }
+        assert!(d.s.windows(2).all(|p| p[0] >= p[1]));
+    }
 
     #[test]
     fn svd_reconstructs_and_pinv_is_a_generalised_inverse() {
@@ -94,6 +266,8 @@ mod tests {
             ],
             3,
         );
+        check(&a);
+        check(&a.transpose());
         let d = svd(&a).unwrap();
         assert_eq!(d.rank(1e-9), 3);
         let p = d.pseudo_inverse(1e-9);
@@ -101,5 +275,33 @@ mod tests {
         for (x, y) in apa.as_slice().iter().zip(a.as_slice()) {
             assert!((x - y).abs() < 1e-13, "{x} vs {y}");
         }
+    }
+
+    #[test]
+    fn rank_deficient_wide_and_tall_matrices() {
+        // Rank 2 in 5 × 9 and its transpose, with an exact zero column.
+        let a = Matrix::from_fn(5, 9, |i, j| {
+            if j == 4 {
+                0.0
+            } else {
+                (i as f64 + 1.0) * (j as f64 - 3.0) + ((i * j) % 3) as f64 * (i as f64 - 2.0)
+            }
+        });
+        check(&a);
+        check(&a.transpose());
+        let d = svd(&a).unwrap();
+        assert_eq!(d.rank(1e-9), 2);
+        // The trailing columns of V span the null space.
+        for k in d.rank(1e-9)..9 {
+            let v: Vec<f64> = (0..9).map(|i| d.v[(i, k)]).collect();
+            let av = a.mul_vec(&v);
+            assert!(av.iter().all(|x| x.abs() < 1e-12), "{av:?}");
+        }
+    }
+
+    #[test]
+    fn non_finite_entries_are_an_error() {
+        let a = Matrix::from_rows(&[vec![1.0, f64::NAN]], 2);
+        assert!(svd(&a).is_err());
     }
 }

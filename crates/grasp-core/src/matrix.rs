@@ -1,7 +1,7 @@
 //! A small dense row-major matrix, sized for grasp problems (tens of rows and columns).
 //!
 //! The solver hot loops work on raw row slices, so the storage is row-major and the
-//! type stays minimal; `faer` is used only for the decompositions (see [`crate::linalg`]).
+//! type stays minimal; the decompositions are in [`crate::linalg`].
 
 use std::ops::{Index, IndexMut};
 

@@ -1,6 +1,7 @@
-//! faer against nalgebra for the SVD pseudo-inverse at grasp sizes (A = [G; Jᵀ] is
-//! 10 × 8 for the paper example, 26 × 18 for the 5-finger mixed hand), and their
-//! accuracy, which decided the choice.
+//! The project's one-sided Jacobi SVD against nalgebra's for the pseudo-inverse at
+//! grasp sizes (A = [G; Jᵀ] is 10 × 8 for the paper example, 26 × 18 for the 5-finger
+//! mixed hand), and their accuracy, which decides. (faer, used before, reached the
+//! same accuracy as Jacobi; it was dropped for its build time.)
 //!
 //! Run: `cargo bench -p grasp-torque --bench decomposition`. Figures are in docs/benchmarks.md.
 
@@ -41,8 +42,9 @@ fn pinv(c: &mut Criterion) {
     for name in ["paper-example", "hand5-mixed"] {
         let a = a_of(name);
         let (r, k) = (a.nrows(), a.ncols());
-        // What the model runs: faer's full SVD (it also gives the complement of range A).
-        g.bench_function(BenchmarkId::new(format!("faer-{r}x{k}"), name), |b| {
+        // What the model runs: the full Jacobi SVD (it also gives the complement of
+        // range A and the null space).
+        g.bench_function(BenchmarkId::new(format!("jacobi-{r}x{k}"), name), |b| {
             b.iter(|| black_box(svd(black_box(&a)).unwrap().pseudo_inverse(1e-9)))
         });
         // nalgebra's (thin) SVD: faster, but see the accuracy report below.
@@ -70,7 +72,7 @@ fn pinv(c: &mut Criterion) {
     for (n, a) in &cases {
         let ours = svd(a).unwrap().pseudo_inverse(1e-9);
         eprintln!(
-            "  {n:<32} faer {:.1e}   nalgebra {:.1e}",
+            "  {n:<32} jacobi {:.1e}   nalgebra {:.1e}",
             aza_error(a, &ours),
             aza_error(a, &nalgebra_pinv(a))
         );
