@@ -213,7 +213,11 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
         let _ = writeln!(o, "  {n:<width$}  {shown:>13}");
     }
     // Components below the check's tolerance of the largest force are rounding.
-    let fmax = s.contact_forces.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let fmax = s
+        .contact_forces
+        .iter()
+        .zip(&model.force_unit)
+        .fold(0.0f64, |a, (v, u)| a.max((v / u).abs()));
     let zero = s.diagnostics.check_tolerance * fmax;
     let _ = writeln!(
         o,
@@ -227,9 +231,15 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
             3 => [Some(f[0]), Some(f[1]), Some(f[2]), None],
             _ => [Some(f[0]), Some(f[1]), Some(f[2]), Some(f[3])],
         };
+        // mz is compared in force units (mz/mu_torsion), like the other components.
+        let mz_unit = model.force_unit[c.offset + c.model.dim() - 1];
         let cells: Vec<String> = slots
             .iter()
-            .map(|v| v.map_or("—".into(), |x| component(x, zero)))
+            .enumerate()
+            .map(|(k, v)| {
+                let unit = if k == 3 { mz_unit } else { 1.0 };
+                v.map_or("—".into(), |x| component(x, zero * unit))
+            })
             .map(|t| format!("{t:>11}"))
             .collect();
         let margin = match s.diagnostics.friction_margins.get(i).copied().flatten() {
@@ -300,7 +310,7 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
     let vtol = 10.0 * d.check_tolerance * fmax;
     let verdict = |v: f64| {
         if v <= vtol {
-            format!("held to ≤ {}", g(vtol, 2))
+            format!("within {}", g(vtol, 2))
         } else {
             format!("VIOLATED beyond {}", g(vtol, 2))
         }

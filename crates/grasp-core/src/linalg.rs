@@ -77,23 +77,22 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 fn orthogonalise(cols: &mut [Vec<f64>], w: &mut [Vec<f64>], negligible: f64) -> bool {
     let n = cols.len();
     let len = cols.first().map_or(0, Vec::len);
-    let tol = f64::EPSILON * (len.max(1) as f64).sqrt();
+    let tol = f64::EPSILON * len.max(1) as f64;
+    // Squared column norms, updated by each rotation and recomputed every sweep.
+    let mut sq: Vec<f64> = cols.iter().map(|c| dot(c, c)).collect();
     for _ in 0..MAX_SWEEPS {
         let mut rotated = false;
         for i in 0..n {
             for j in i + 1..n {
-                let (a, b) = {
+                let (alpha, beta) = (sq[i], sq[j]);
+                if alpha <= negligible || beta <= negligible {
+                    continue;
+                }
+                let gamma = {
                     let (l, r) = cols.split_at(j);
-                    (&l[i], &r[0])
+                    dot(&l[i], &r[0])
                 };
-                let alpha = dot(a, a);
-                let beta = dot(b, b);
-                let gamma = dot(a, b);
-                if gamma == 0.0
-                    || alpha <= negligible
-                    || beta <= negligible
-                    || gamma.abs() <= tol * (alpha * beta).sqrt()
-                {
+                if gamma.abs() <= tol * (alpha * beta).sqrt() {
                     continue;
                 }
                 rotated = true;
@@ -109,10 +108,15 @@ fn orthogonalise(cols: &mut [Vec<f64>], w: &mut [Vec<f64>], negligible: f64) -> 
                         *y = s * p + c * q;
                     }
                 }
+                sq[i] = alpha - t * gamma;
+                sq[j] = beta + t * gamma;
             }
         }
         if !rotated {
             return true;
+        }
+        for (q, c) in sq.iter_mut().zip(cols.iter()) {
+            *q = dot(c, c);
         }
     }
     false

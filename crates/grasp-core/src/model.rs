@@ -137,6 +137,9 @@ pub struct GraspModel {
     /// `mz`, 1 otherwise. `|f_j| / force_unit_j` is in force units whatever the
     /// assumption, which makes the residual check unit-invariant.
     pub force_unit: Vec<f64>,
+    /// Per row of `[G; Jᵀ]`, `Σ_j |a_ij| · force_unit_j`: how strongly a unit force
+    /// (mz counted as mz/mu_torsion) reaches the row, for the residual check's scale.
+    pub row_reach: Vec<f64>,
 }
 
 impl GraspModel {
@@ -258,6 +261,15 @@ impl GraspModel {
             unreachable,
             wrench_scale,
             torque_scale: r[6..].to_vec(),
+            row_reach: (0..6 + m)
+                .map(|i| {
+                    a.row(i)
+                        .iter()
+                        .zip(&force_unit)
+                        .map(|(x, u)| (x * u).abs())
+                        .sum()
+                })
+                .collect(),
             force_unit,
         })
     }

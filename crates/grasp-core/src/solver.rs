@@ -429,13 +429,6 @@ impl TorqueQp {
             .iter()
             .zip(&model.force_unit)
             .fold(0.0f64, |a, (v, u)| a.max((v / u).abs()));
-        let through = |row: &[f64]| -> f64 {
-            row.iter()
-                .zip(&model.force_unit)
-                .map(|(a, u)| (a * u).abs())
-                .sum::<f64>()
-                * fmax
-        };
         let admitted = 10.0 * model.rank_tolerance * norm_inf(&model.scaled_wrench(w));
         let rounding = 1e3 * f64::EPSILON * (6 + model.joints() + model.passive_dim()) as f64;
         let (mut wres, mut wbad, mut wratio) = (0.0f64, false, 0.0f64);
@@ -443,7 +436,8 @@ impl TorqueQp {
             let row = model.grasp_matrix.row(i);
             let r = (dot(row, f) - w[i]).abs();
             wres = wres.max(r);
-            let mut bound = tol * (w[i].abs() + through(row)) + admitted / model.wrench_scale[i];
+            let mut bound =
+                tol * (w[i].abs() + model.row_reach[i] * fmax) + admitted / model.wrench_scale[i];
             if exceeds(r, bound) {
                 bound += rounding * model.force_terms_dot(row, w, tau, &out.internal_forces);
                 wbad |= exceeds(r, bound);
@@ -455,7 +449,8 @@ impl TorqueQp {
             let row = model.jacobian_transpose.row(j);
             let r = (dot(row, f) - t).abs();
             tres = tres.max(r);
-            let mut bound = tol * (t.abs() + through(row)) + admitted / model.torque_scale[j];
+            let mut bound =
+                tol * (t.abs() + model.row_reach[6 + j] * fmax) + admitted / model.torque_scale[j];
             if exceeds(r, bound) {
                 bound += rounding * model.force_terms_dot(row, w, tau, &out.internal_forces);
                 tbad |= exceeds(r, bound);
@@ -470,28 +465,41 @@ impl TorqueQp {
             .map(|i| (dot(model.eq.row(i), tau) + dot(model.eq_w.row(i), w)).abs())
             .fold(0.0, f64::max);
         // Force scale: the largest contact force, with mz measured as mz/mu_torsion.
-        let fscale = self
-            .contacts
-            .iter()
-            .map(|c| {
-                let fc = &f[c.offset..c.offset + c.model.dim()];
-                c.model.normal_gauge_scale(fc)
-            })
-            .fold(0.0, f64::max);
+        // Each contact's gauge g(f), once (kept in the margins' buffer until the margins
+        // replace it below).
+        let mut fscale = 0.0f64;
+        for c in &self.contacts {
+            let fc = &f[c.offset..c.offset + c.model.dim()];
+            let g = c.model.gauge(fc);
+            fscale = fscale.max(g.max(fc[c.model.normal_index()].abs()));
+            d.friction_margins.push(Some(g));
+        }
         // c − H τ = fmin − S f on contact rows (S is block-diagonal: a few flops per
         // row), and the limit rows read τ directly.
         let (mut viol, mut vbad) = (0.0f64, false);
         for (ci, c) in self.contacts.iter().enumerate() {
             let fc = &f[c.offset..c.offset + c.model.dim()];
+            let faces = match &self.constraints.cones[ci] {
+                ConeRepr::Inscribed(cone) => Some(&cone.faces),
+                ConeRepr::Exact => None,
+            };
             for k in 0..c.rows {
                 let i = c.first_row + k;
-                let (sf, abs) = self.row_on_force(ci, k, fc);
+                let sf = match faces {
+                    Some(s) => dot(s.row(k), fc),
+                    None => fc[c.model.normal_index()],
+                };
                 let v = self.c0[i] - sf;
                 viol = viol.max(v);
-                vbad |= exceeds(v, tol * (abs + self.c0[i].abs() + fscale));
+                // Only a row over the cheap bound pays for its own terms.
+                let cheap = tol * (self.c0[i].abs() + fscale);
+                if exceeds(v, cheap) {
+                    vbad |= exceeds(v, cheap + tol * self.row_on_force(ci, k, fc).1);
+                }
             }
         }
-        for (i, id) in self.rows.iter().enumerate() {
+        let limits = self.rows.len() - self.contacts.last().map_or(0, |c| c.first_row + c.rows);
+        for (i, id) in self.rows.iter().enumerate().skip(self.rows.len() - limits) {
             if let RowId::TorqueLimit { joint, .. } = *id {
                 let v = self.c0[i] - dot(self.h.row(i), tau);
                 viol = viol.max(v);
@@ -500,23 +508,25 @@ impl TorqueQp {
         }
         d.max_violation = viol.max(0.0);
         let mut cone = 0.0f64;
-        for (c, repr) in self.contacts.iter().zip(&self.constraints.cones) {
-            if let ConeRepr::Exact = repr {
-                let fc = &f[c.offset..c.offset + c.model.dim()];
-                let v = c.model.gauge(fc) - fc[c.model.normal_index()];
-                cone = cone.max(v);
-                vbad |= exceeds(v, tol * fscale.max(f64::MIN_POSITIVE) * 10.0);
-            }
-        }
-        d.cone_violation = cone.max(0.0);
         // A contact whose force is rounding noise next to the largest has no margin.
         let zero = 1e3 * f64::EPSILON * (n as f64) * fscale;
-        for c in &self.contacts {
-            let fc = &f[c.offset..c.offset + c.model.dim()];
-            let size = c.model.normal_gauge_scale(fc);
-            d.friction_margins
-                .push((size > zero).then(|| c.model.exact_margin(fc, 0.0)));
+        for ((c, repr), m) in self
+            .contacts
+            .iter()
+            .zip(&self.constraints.cones)
+            .zip(d.friction_margins.iter_mut())
+        {
+            let fz = f[c.offset + c.model.normal_index()];
+            let g = m.unwrap_or(0.0);
+            if let ConeRepr::Exact = repr {
+                cone = cone.max(g - fz);
+                vbad |= exceeds(g - fz, tol * fscale.max(f64::MIN_POSITIVE) * 10.0);
+            }
+            // (fz − g)/max(|fz|, g): ContactModel::exact_margin.
+            let size = fz.abs().max(g);
+            *m = (size > zero).then(|| (fz - g) / size);
         }
+        d.cone_violation = cone.max(0.0);
         let paper = model.equilibrium == Equilibrium::PaperModel;
         if paper {
             let scale = norm_inf(w).max(norm_inf(f)).max(1.0);
