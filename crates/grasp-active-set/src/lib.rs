@@ -23,7 +23,7 @@
 //! (most negative multiplier, Step 4): O(k²) per iteration, no allocation.
 //! Zero-length steps switch to Bland's rule, which rules out cycling.
 
-use grasp_core::linalg::svd;
+use grasp_core::linalg::{decompose, RankThreshold};
 use grasp_core::matrix::{dot, norm_inf};
 use grasp_core::{
     Capabilities, ForceSpaceQp, LeastDistance, Matrix, Reason, RowId, Solution, Status, TorqueQp,
@@ -149,10 +149,12 @@ pub enum BuildError {
     Svd(#[from] grasp_core::linalg::SvdError),
     /// The consistency equalities the core handed over are dependent in the weighted
     /// torque coordinates (torque weights too far apart).
-    #[error("the consistency equalities are numerically dependent after weighting (condition {condition:.1e}); bring the torque weights closer together")]
+    #[error("the consistency equalities are numerically dependent after weighting (rank {rank} of {rows}); bring the torque weights closer together")]
     DependentEqualities {
-        /// Ratio of the largest to the smallest singular value of `C D⁻¹`.
-        condition: f64,
+        /// The numerical rank of `C D⁻¹` (relative tolerance 1e-13).
+        rank: usize,
+        /// Its rows.
+        rows: usize,
     },
 }
 
@@ -290,25 +292,20 @@ impl Engine {
         let dinv: Vec<f64> = qp.weights.iter().map(|w| 1.0 / w.sqrt()).collect();
         let scale_cols = |a: &Matrix| Matrix::from_fn(a.nrows(), m, |i, j| a[(i, j)] * dinv[j]);
         let cd = scale_cols(qp.eq);
-        let dec = svd(&cd)?;
-        // The core decided the rank: every row of C is independent.
+        // The core decided the rank: every row of C is independent. Weighting must not
+        // make them dependent.
         let rc = qp.eq.nrows();
-        if rc > 0 {
-            let (smax, smin) = (dec.s[0], dec.s[rc - 1]);
-            if smin.is_nan() || smin <= 1e-13 * smax {
-                return Err(BuildError::DependentEqualities {
-                    condition: smax / smin,
-                });
-            }
+        let dec = decompose(&cd, RankThreshold::Relative(1e-13))?;
+        if dec.rank() < rc {
+            return Err(BuildError::DependentEqualities {
+                rank: dec.rank(),
+                rows: rc,
+            });
         }
         let k = m - rc;
-        let null_basis = Matrix::from_fn(m, k, |i, j| dec.v[(i, rc + j)]);
-        // u0 = Cd⁺ e = −Cd⁺ eq_w w, with Cd⁺ = V Σ⁻¹ Uᵀ over all rc rows.
-        let pinv = Matrix::from_fn(m, rc, |i, j| {
-            (0..rc)
-                .map(|t| dec.v[(i, t)] * dec.u[(j, t)] / dec.s[t])
-                .sum()
-        });
+        let null_basis = dec.null_basis;
+        // u0 = Cd⁺ e = −Cd⁺ eq_w w.
+        let pinv = dec.row_basis.matmul(&dec.row_transform);
         let pu = pinv.matmul(qp.eq_w);
         let pu = Matrix::from_fn(m, 6, |i, j| -pu[(i, j)]);
         let hd = scale_cols(qp.h);

@@ -227,6 +227,193 @@ pub fn svd(a: &Matrix) -> Result<Svd, SvdError> {
     Ok(Svd { u, s, v })
 }
 
+/// What the model needs of a matrix A (rows × cols) of rank r, from either a QR
+/// factorisation (the fast path, when A is clearly of full rank) or the SVD:
+///
+/// - `A x = b` for a b in the range of A ⇔ `row_basisᵀ x = row_transform · b`;
+/// - `A⁺ = row_basis · row_transform`;
+/// - `null_basis` spans the null space, `left_null` the complement of the range.
+///
+/// All three bases are orthonormal.
+#[derive(Clone, Debug)]
+pub struct Decomposition {
+    /// Orthonormal basis of the row space, cols × r.
+    pub row_basis: Matrix,
+    /// r × rows.
+    pub row_transform: Matrix,
+    /// Orthonormal basis of the null space, cols × (cols − r).
+    pub null_basis: Matrix,
+    /// Orthonormal basis of the range's complement, rows × (rows − r).
+    pub left_null: Matrix,
+}
+
+impl Decomposition {
+    /// The rank r.
+    pub fn rank(&self) -> usize {
+        self.row_basis.ncols()
+    }
+
+    /// The pseudo-inverse `A⁺ = row_basis · row_transform`.
+    pub fn pseudo_inverse(&self) -> Matrix {
+        self.row_basis.matmul(&self.row_transform)
+    }
+}
+
+/// How small a singular value counts as zero.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RankThreshold {
+    /// At or below `tol · σ_max`.
+    Relative(f64),
+    /// At or below `tol`.
+    Absolute(f64),
+}
+
+/// Householder QR of the columns `cols` (k columns of length `len ≥ k`): the reflector
+/// vectors and R (k × k, column-major: `r[j][i]` for i ≤ j).
+fn householder(mut cols: Vec<Vec<f64>>) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    let k = cols.len();
+    let mut vs = Vec::with_capacity(k);
+    for c in 0..k {
+        let x = &cols[c][c..];
+        let norm = dot(x, x).sqrt();
+        let mut v = x.to_vec();
+        v[0] += if x[0] >= 0.0 { norm } else { -norm };
+        let vn = dot(&v, &v);
+        if vn > 0.0 {
+            for col in cols.iter_mut().skip(c) {
+                let f = 2.0 * dot(&v, &col[c..]) / vn;
+                for (y, vi) in col[c..].iter_mut().zip(&v) {
+                    *y -= f * vi;
+                }
+            }
+        }
+        vs.push(v);
+    }
+    let r = cols.into_iter().map(|mut c| {
+        c.truncate(k);
+        c
+    });
+    (vs, r.collect())
+}
+
+/// Column `e` of Q = H_1 … H_k (length `len`).
+fn q_column(vs: &[Vec<f64>], len: usize, e: usize) -> Vec<f64> {
+    let mut y = vec![0.0; len];
+    y[e] = 1.0;
+    for c in (0..vs.len()).rev() {
+        let v = &vs[c];
+        let vn = dot(v, v);
+        if vn > 0.0 {
+            let f = 2.0 * dot(v, &y[c..]) / vn;
+            for (yi, vi) in y[c..].iter_mut().zip(v) {
+                *yi -= f * vi;
+            }
+        }
+    }
+    y
+}
+
+/// R⁻¹ of an upper-triangular k × k R (column-major), or `None` if a diagonal is 0.
+fn triangular_inverse(r: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
+    let k = r.len();
+    // Column j of R⁻¹ solves R x = e_j by back substitution.
+    let mut inv = vec![vec![0.0; k]; k];
+    for j in 0..k {
+        let x = &mut inv[j];
+        for i in (0..=j).rev() {
+            let mut s = if i == j { 1.0 } else { 0.0 };
+            for l in i + 1..=j {
+                s -= r[l][i] * x[l];
+            }
+            if r[i][i] == 0.0 {
+                return None;
+            }
+            x[i] = s / r[i][i];
+        }
+    }
+    Some(inv)
+}
+
+/// The fast path: Householder QR of the longer side when A has full rank by a
+/// margin (`‖R‖_F ‖R⁻¹‖_F < 1e6`, so `σ_min/σ_max > 1e-6` and no rank decision near
+/// any threshold in use is at stake); `None` otherwise.
+fn decompose_qr(a: &Matrix, threshold: RankThreshold) -> Option<Decomposition> {
+    let (rows, cols) = (a.nrows(), a.ncols());
+    let wide = rows < cols;
+    let (len, k) = if wide { (cols, rows) } else { (rows, cols) };
+    let m: Vec<Vec<f64>> = (0..k)
+        .map(|c| {
+            (0..len)
+                .map(|i| if wide { a[(c, i)] } else { a[(i, c)] })
+                .collect()
+        })
+        .collect();
+    let (vs, r) = householder(m);
+    let rinv = triangular_inverse(&r)?;
+    let fro = |x: &[Vec<f64>]| x.iter().map(|c| dot(c, c)).sum::<f64>().sqrt();
+    let (nr, ni) = (fro(&r), fro(&rinv));
+    if (nr * ni).is_nan() || nr * ni >= 1e6 {
+        return None;
+    }
+    if let RankThreshold::Absolute(t) = threshold {
+        // σ_min ≥ 1/‖R⁻¹‖_F must clear the threshold by the same margin.
+        if 1.0 / ni <= 1e6 * t {
+            return None;
+        }
+    }
+    let q: Vec<Vec<f64>> = (0..len).map(|e| q_column(&vs, len, e)).collect();
+    // q[e] is column e of Q (len × len).
+    let qm = |i: usize, j: usize| q[j][i];
+    Some(if wide {
+        // Aᵀ = Q₁ R: A = Rᵀ Q₁ᵀ, so A x = b ⇔ Q₁ᵀ x = R⁻ᵀ b.
+        Decomposition {
+            row_basis: Matrix::from_fn(cols, rows, qm),
+            row_transform: Matrix::from_fn(rows, rows, |i, j| rinv[i][j]),
+            null_basis: Matrix::from_fn(cols, cols - rows, |i, j| qm(i, rows + j)),
+            left_null: Matrix::zeros(rows, 0),
+        }
+    } else {
+        // A = Q₁ R: A x = b ⇔ x = R⁻¹ Q₁ᵀ b (b in the range).
+        let mut t = Matrix::zeros(cols, rows);
+        for i in 0..cols {
+            for j in 0..rows {
+                t[(i, j)] = (i..cols).map(|l| rinv[l][i] * q[l][j]).sum();
+            }
+        }
+        Decomposition {
+            row_basis: Matrix::identity(cols),
+            row_transform: t,
+            null_basis: Matrix::zeros(cols, 0),
+            left_null: Matrix::from_fn(rows, rows - cols, |i, j| qm(i, cols + j)),
+        }
+    })
+}
+
+/// The decomposition the model needs, with the rank decided by `threshold`: by QR
+/// when A is clearly of full rank, else by the SVD.
+pub fn decompose(a: &Matrix, threshold: RankThreshold) -> Result<Decomposition, SvdError> {
+    let (rows, cols) = (a.nrows(), a.ncols());
+    if a.as_slice().iter().any(|x| !x.is_finite()) {
+        return Err(SvdError { rows, cols });
+    }
+    if rows > 0 && cols > 0 {
+        if let Some(d) = decompose_qr(a, threshold) {
+            return Ok(d);
+        }
+    }
+    let d = svd(a)?;
+    let r = match threshold {
+        RankThreshold::Relative(t) => d.rank(t),
+        RankThreshold::Absolute(t) => d.s.iter().take_while(|&&s| s > t).count(),
+    };
+    Ok(Decomposition {
+        row_basis: Matrix::from_fn(cols, r, |i, j| d.v[(i, j)]),
+        row_transform: Matrix::from_fn(r, rows, |i, j| d.u[(j, i)] / d.s[i]),
+        null_basis: Matrix::from_fn(cols, cols - r, |i, j| d.v[(i, r + j)]),
+        left_null: Matrix::from_fn(rows, rows - r, |i, j| d.u[(i, r + j)]),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -300,6 +487,36 @@ mod tests {
             let v: Vec<f64> = (0..9).map(|i| d.v[(i, k)]).collect();
             let av = a.mul_vec(&v);
             assert!(av.iter().all(|x| x.abs() < 1e-12), "{av:?}");
+        }
+    }
+
+    /// The QR fast path and the SVD agree: same pseudo-inverse, orthonormal bases of
+    /// the right dimensions, `A · null = 0`, `left_nullᵀ · A = 0`.
+    #[test]
+    fn qr_and_svd_decompositions_agree() {
+        for (r, c) in [(10, 8), (5, 9), (7, 7), (26, 18), (6, 20)] {
+            let a = Matrix::from_fn(r, c, |i, j| {
+                ((i * 7 + j * 3) % 11) as f64 - 5.0 + 0.1 * (i as f64) * (j as f64).sin()
+            });
+            let fast = decompose(&a, RankThreshold::Relative(1e-9)).unwrap();
+            let slow = {
+                let d = svd(&a).unwrap();
+                d.pseudo_inverse(1e-9)
+            };
+            let p = fast.pseudo_inverse();
+            for (x, y) in p.as_slice().iter().zip(slow.as_slice()) {
+                assert!(
+                    (x - y).abs() < 1e-10 * (1.0 + y.abs()),
+                    "{r}x{c}: {x} vs {y}"
+                );
+            }
+            let rank = fast.rank();
+            assert_eq!(fast.null_basis.ncols(), c - rank);
+            assert_eq!(fast.left_null.ncols(), r - rank);
+            let an = a.matmul(&fast.null_basis);
+            assert!(an.as_slice().iter().all(|x| x.abs() < 1e-12));
+            let la = fast.left_null.transpose().matmul(&a);
+            assert!(la.as_slice().iter().all(|x| x.abs() < 1e-12));
         }
     }
 

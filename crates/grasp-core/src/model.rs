@@ -23,7 +23,7 @@
 
 use crate::contact::ContactModel;
 use crate::error::ModelError;
-use crate::linalg::svd;
+use crate::linalg::{decompose, RankThreshold};
 use crate::matrix::{dot, norm_inf, Matrix};
 use crate::problem::GraspProblem;
 use serde::{Deserialize, Serialize};
@@ -186,18 +186,20 @@ impl GraspModel {
             })
             .collect();
         let mat = Matrix::from_fn(6 + m, n, |i, j| ad[(i, j)] * r[i]);
-        let dec = svd(&mat).map_err(|_| ModelError::Decomposition {
-            what: "[G; Jᵀ]",
-            rows: 6 + m,
-            cols: n,
+        let dec = decompose(&mat, RankThreshold::Relative(opts.rank_tolerance)).map_err(|_| {
+            ModelError::Decomposition {
+                what: "[G; Jᵀ]",
+                rows: 6 + m,
+                cols: n,
+            }
         })?;
-        let rank = dec.rank(opts.rank_tolerance);
-        let zm = dec.pseudo_inverse(opts.rank_tolerance);
+        let rank = dec.rank();
+        let zm = dec.pseudo_inverse();
         // Z = D⁻¹ (R A D⁻¹)⁺ R.
         let z = Matrix::from_fn(n, 6 + m, |i, j| dinv[i] * zm[(i, j)] * r[j]);
         let z1 = z.columns(0, 6);
         let z2 = z.columns(6, 6 + m);
-        let passive_basis = Matrix::from_fn(n, n - rank, |i, k| dinv[i] * dec.v[(i, rank + k)]);
+        let passive_basis = Matrix::from_fn(n, n - rank, |i, k| dinv[i] * dec.null_basis[(i, k)]);
         let mut wrench_scale = [1.0; 6];
         wrench_scale.copy_from_slice(&r[..6]);
 
@@ -209,28 +211,32 @@ impl GraspModel {
             ),
             Equilibrium::Consistent => {
                 // U⊥ᵀ R [w; τ] = 0 with x = R_τ τ: P_τ x = −P_w R_w w.
-                let p0 = 6 + m - rank;
-                let pw0 = Matrix::from_fn(p0, 6, |i, j| dec.u[(j, rank + i)]);
-                let pt = Matrix::from_fn(p0, m, |i, j| dec.u[(6 + j, rank + i)]);
+                let u = &dec.left_null;
+                let p0 = u.ncols();
+                let pw0 = Matrix::from_fn(p0, 6, |i, j| u[(j, i)]);
+                let pt = Matrix::from_fn(p0, m, |i, j| u[(6 + j, i)]);
                 // One rank decision for C: independent rows only. P_τ has orthonormal
                 // origin (‖P_τ‖ ≤ 1), so the threshold is absolute.
-                let dc = svd(&pt).map_err(|_| ModelError::Decomposition {
-                    what: "the consistency equalities",
-                    rows: p0,
-                    cols: m,
-                })?;
-                let rc =
-                    dc.s.iter()
-                        .take_while(|&&s| s > opts.rank_tolerance)
-                        .count();
-                let eq = Matrix::from_fn(rc, m, |i, j| dc.v[(j, i)] * r[6 + j]);
+                let dc =
+                    decompose(&pt, RankThreshold::Absolute(opts.rank_tolerance)).map_err(|_| {
+                        ModelError::Decomposition {
+                            what: "the consistency equalities",
+                            rows: p0,
+                            cols: m,
+                        }
+                    })?;
+                let rc = dc.rank();
+                let eq = Matrix::from_fn(rc, m, |i, j| dc.row_basis[(j, i)] * r[6 + j]);
                 let eq_w = Matrix::from_fn(rc, 6, |i, j| {
-                    r[j] * (0..p0).map(|k| dc.u[(k, i)] * pw0[(k, j)]).sum::<f64>() / dc.s[i]
+                    r[j] * (0..p0)
+                        .map(|k| dc.row_transform[(i, k)] * pw0[(k, j)])
+                        .sum::<f64>()
                 });
                 // Applied to the equilibrated wrench.
-                let unreachable = Matrix::from_fn(p0 - rc, 6, |i, j| {
+                let q = dc.left_null.ncols();
+                let unreachable = Matrix::from_fn(q, 6, |i, j| {
                     (0..p0)
-                        .map(|k| dc.u[(k, rc + i)] * pw0[(k, j)])
+                        .map(|k| dc.left_null[(k, i)] * pw0[(k, j)])
                         .sum::<f64>()
                 });
                 (eq, eq_w, unreachable)

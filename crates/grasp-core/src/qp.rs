@@ -17,7 +17,7 @@
 use crate::cone::{inscribed_cone, InscribedCone, Linearization};
 use crate::contact::ContactModel;
 use crate::error::ModelError;
-use crate::linalg::svd;
+use crate::linalg::{decompose, RankThreshold};
 use crate::matrix::{dot, Matrix};
 use crate::model::GraspModel;
 use serde::Serialize;
@@ -200,26 +200,54 @@ impl TorqueQp {
     /// The linear rows of `model` under `constraints` (one entry per contact).
     pub fn new(model: Arc<GraspModel>, constraints: Constraints) -> Self {
         let (m, d) = (model.joints(), model.free_dim());
-        let mut h_rows = Vec::new();
-        let mut hp_rows = Vec::new();
-        let mut hw_rows = Vec::new();
-        let mut c0 = Vec::new();
-        let mut rows = Vec::new();
+        let face_rows = |ci: usize| match &constraints.cones[ci] {
+            ConeRepr::Inscribed(cone) => cone.faces.nrows(),
+            ConeRepr::Exact => 1,
+        };
+        let limits = model.torque_limits.iter().flatten().count();
+        let total: usize = (0..constraints.cones.len()).map(face_rows).sum::<usize>() + 2 * limits;
+        // Rows are written in place: H = S Z2, Hp = S N, Hw = S Z1 (S block-diagonal).
+        let (mut h, mut hp, mut hw) = (
+            Matrix::zeros(total, m),
+            Matrix::zeros(total, d),
+            Matrix::zeros(total, 6),
+        );
+        let mut c0 = Vec::with_capacity(total);
+        let mut rows = Vec::with_capacity(total);
         let mut contacts = Vec::with_capacity(model.contacts.len());
         for (ci, repr) in constraints.cones.iter().enumerate() {
-            let faces = contact_faces(&model, ci, repr);
-            let (h, hp, hw) = block_rows(&model, ci, &faces);
-            let r = faces.nrows();
+            let c = &model.contacts[ci];
+            let (off, dim) = (model.offsets[ci], c.dim());
+            let r = face_rows(ci);
             contacts.push(ContactBlock {
-                model: model.contacts[ci],
-                offset: model.offsets[ci],
+                model: *c,
+                offset: off,
                 first_row: rows.len(),
                 rows: r,
             });
             for k in 0..r {
-                h_rows.push(h.row(k).to_vec());
-                hp_rows.push(hp.row(k).to_vec());
-                hw_rows.push(hw.row(k).to_vec());
+                let i = rows.len();
+                for t in 0..dim {
+                    let s = match repr {
+                        ConeRepr::Inscribed(cone) => cone.faces[(k, t)],
+                        ConeRepr::Exact => (t == c.normal_index()) as u8 as f64,
+                    };
+                    if s == 0.0 {
+                        continue;
+                    }
+                    for (x, z) in h.row_mut(i).iter_mut().zip(model.z2.row(off + t)) {
+                        *x += s * z;
+                    }
+                    for (x, z) in hw.row_mut(i).iter_mut().zip(model.z1.row(off + t)) {
+                        *x += s * z;
+                    }
+                    if d > 0 {
+                        let nrow = model.passive_basis.row(off + t);
+                        for (x, z) in hp.row_mut(i).iter_mut().zip(nrow) {
+                            *x += s * z;
+                        }
+                    }
+                }
                 if k + 1 == r {
                     c0.push(model.min_normal_force[ci]);
                     rows.push(RowId::NormalForce { contact: ci });
@@ -236,20 +264,16 @@ impl TorqueQp {
         for (j, lim) in model.torque_limits.iter().enumerate() {
             if let Some(t) = *lim {
                 for upper in [false, true] {
-                    let mut row = vec![0.0; m];
-                    row[j] = if upper { -1.0 } else { 1.0 };
-                    h_rows.push(row);
-                    hp_rows.push(vec![0.0; d]);
-                    hw_rows.push(vec![0.0; 6]);
+                    h[(rows.len(), j)] = if upper { -1.0 } else { 1.0 };
                     c0.push(-t);
                     rows.push(RowId::TorqueLimit { joint: j, upper });
                 }
             }
         }
         Self {
-            h: Matrix::from_rows(&h_rows, m),
-            hp: Matrix::from_rows(&hp_rows, d),
-            hw: Matrix::from_rows(&hw_rows, 6),
+            h,
+            hp,
+            hw,
             c0,
             rows,
             contacts,
@@ -445,17 +469,18 @@ impl ForceSpaceQp {
                 }
             }
         }
-        // G f = w with independent rows: Vᵣᵀ f = Σᵣ⁻¹ Uᵣᵀ w.
+        // G f = w with independent rows: row_basisᵀ f = row_transform · w.
         let g = &model.grasp_matrix;
-        let d = svd(g).map_err(|_| ModelError::Decomposition {
-            what: "G",
-            rows: 6,
-            cols: n,
+        let d = decompose(g, RankThreshold::Relative(model.rank_tolerance)).map_err(|_| {
+            ModelError::Decomposition {
+                what: "G",
+                rows: 6,
+                cols: n,
+            }
         })?;
-        let r = d.rank(model.rank_tolerance);
-        let eq = Matrix::from_fn(r, n, |i, j| d.v[(j, i)]);
-        let eq_w = Matrix::from_fn(r, 6, |i, j| -d.u[(j, i)] / d.s[i]);
-        let unreachable = Matrix::from_fn(6 - r, 6, |i, j| d.u[(j, r + i)]);
+        let eq = d.row_basis.transpose();
+        let eq_w = Matrix::from_fn(d.rank(), 6, |i, j| -d.row_transform[(i, j)]);
+        let unreachable = d.left_null.transpose();
         let h = Matrix::from_rows(&h_rows, n);
         Ok(Self {
             hw: Matrix::zeros(h.nrows(), 6),
