@@ -137,6 +137,8 @@ pub struct GraspModel {
     /// `mz`, 1 otherwise. `|f_j| / force_unit_j` is in force units whatever the
     /// assumption, which makes the residual check unit-invariant.
     pub force_unit: Vec<f64>,
+    /// `1 / force_unit`, for the hot path.
+    pub force_unit_inv: Vec<f64>,
     /// Per row of `[G; Jᵀ]`, `Σ_j |a_ij| · force_unit_j`: how strongly a unit force
     /// (mz counted as mz/mu_torsion) reaches the row, for the residual check's scale.
     pub row_reach: Vec<f64>,
@@ -276,6 +278,7 @@ impl GraspModel {
                         .sum()
                 })
                 .collect(),
+            force_unit_inv: force_unit.iter().map(|u| 1.0 / u).collect(),
             force_unit,
         })
     }

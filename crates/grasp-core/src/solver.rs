@@ -427,8 +427,8 @@ impl TorqueQp {
         // for a row that fails without it).
         let fmax = f
             .iter()
-            .zip(&model.force_unit)
-            .fold(0.0f64, |a, (v, u)| a.max((v / u).abs()));
+            .zip(&model.force_unit_inv)
+            .fold(0.0f64, |a, (v, u)| a.max((v * u).abs()));
         let admitted = 10.0 * model.rank_tolerance * norm_inf(&model.scaled_wrench(w));
         let rounding = 1e3 * f64::EPSILON * (6 + model.joints() + model.passive_dim()) as f64;
         let (mut wres, mut wbad, mut wratio) = (0.0f64, false, 0.0f64);
@@ -436,26 +436,31 @@ impl TorqueQp {
             let row = model.grasp_matrix.row(i);
             let r = (dot(row, f) - w[i]).abs();
             wres = wres.max(r);
-            let mut bound =
-                tol * (w[i].abs() + model.row_reach[i] * fmax) + admitted / model.wrench_scale[i];
-            if exceeds(r, bound) {
-                bound += rounding * model.force_terms_dot(row, w, tau, &out.internal_forces);
-                wbad |= exceeds(r, bound);
+            // In equilibrated units (× wrench_scale_i), which saves a division.
+            let ri = model.wrench_scale[i];
+            let mut bound = tol * (w[i].abs() + model.row_reach[i] * fmax) * ri + admitted;
+            if exceeds(r * ri, bound) {
+                bound += rounding * model.force_terms_dot(row, w, tau, &out.internal_forces) * ri;
+                wbad |= exceeds(r * ri, bound);
             }
-            wratio = wratio.max(r / bound.max(f64::MIN_POSITIVE));
+            if r > 0.0 {
+                wratio = wratio.max(r * ri / bound);
+            }
         }
         let (mut tres, mut tbad, mut tratio) = (0.0f64, false, 0.0f64);
         for (j, t) in tau.iter().enumerate() {
             let row = model.jacobian_transpose.row(j);
             let r = (dot(row, f) - t).abs();
             tres = tres.max(r);
-            let mut bound =
-                tol * (t.abs() + model.row_reach[6 + j] * fmax) + admitted / model.torque_scale[j];
-            if exceeds(r, bound) {
-                bound += rounding * model.force_terms_dot(row, w, tau, &out.internal_forces);
-                tbad |= exceeds(r, bound);
+            let rj = model.torque_scale[j];
+            let mut bound = tol * (t.abs() + model.row_reach[6 + j] * fmax) * rj + admitted;
+            if exceeds(r * rj, bound) {
+                bound += rounding * model.force_terms_dot(row, w, tau, &out.internal_forces) * rj;
+                tbad |= exceeds(r * rj, bound);
             }
-            tratio = tratio.max(r / bound.max(f64::MIN_POSITIVE));
+            if r > 0.0 {
+                tratio = tratio.max(r * rj / bound);
+            }
         }
         d.wrench_residual = wres;
         d.torque_residual = tres;
