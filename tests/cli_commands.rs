@@ -130,3 +130,58 @@ fn table_markdown_rows_match_their_headers_and_csv_refuses_mixed_joints() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("different joints"));
 }
+
+fn text(args: &[&str]) -> String {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
+        .args(args)
+        .output()
+        .unwrap();
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Every judgement in a report comes from the number next to it.
+#[test]
+fn report_labels_follow_their_numbers() {
+    let paper = fixture("paper-example.json");
+    let held = text(&["solve", &paper]);
+    assert!(held.contains("(the object is held"), "{held}");
+    assert!(held.contains("(the joints produce f"), "{held}");
+    assert!(!held.contains("NOT"), "{held}");
+    // The paper model leaves 1 N unbalanced: the report says so.
+    let unheld = text(&["solve", &paper, "--paper-model"]);
+    assert!(unheld.contains("the object is NOT held"), "{unheld}");
+    assert!(unheld.contains("the joints do NOT produce f"), "{unheld}");
+    // The null space of [G; Jᵀ] and the assumption that fixes it are stated.
+    assert!(held.contains("1-dimensional null space") && held.contains("euclidean"));
+    // Exact cones report exact-cone quantities, not linearised rows.
+    if cfg!(feature = "clarabel") {
+        let exact = text(&["solve", &paper, "--cones", "exact"]);
+        assert!(exact.contains("exact cones, 2 consistency") || exact.contains("exact cones"));
+        assert!(exact.contains("max(g(f) − fz)"), "{exact}");
+        assert!(!exact.contains("inscribed cones"), "{exact}");
+        assert!(!exact.contains("N = "), "{exact}");
+    }
+    // Rounding noise is shown as 0, and unloaded contacts as such.
+    let zero = std::env::temp_dir().join(format!("grasp-torque-zero-{}.json", std::process::id()));
+    let mut p: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&paper).unwrap()).unwrap();
+    p["wrench"] = serde_json::json!([0, 0, 0, 0, 0, 0]);
+    std::fs::write(&zero, p.to_string()).unwrap();
+    let z = text(&["solve", zero.to_str().unwrap()]);
+    assert!(z.contains("unloaded"), "{z}");
+    // Sweep and compare: the gap is relative, and K appears only with SFCe contacts.
+    let sweep = text(&["sweep", &paper, "--sides", "4,8", "--repeats", "1"]);
+    assert!(sweep.contains("relative"), "{sweep}");
+    assert!(!sweep.contains(" K "), "{sweep}");
+    let sfce = text(&[
+        "sweep",
+        &fixture("hand4-sfce.json"),
+        "--sides",
+        "4",
+        "--repeats",
+        "1",
+    ]);
+    assert!(sfce.contains(" K "), "{sfce}");
+    let compare = text(&["compare", &paper]);
+    assert!(!compare.contains("K ="), "{compare}");
+}
