@@ -122,47 +122,11 @@ fn orthogonalise(cols: &mut [Vec<f64>], w: &mut [Vec<f64>], negligible: f64) -> 
     false
 }
 
-/// Completes orthonormal columns `q` (each of length `len`) to an orthonormal basis,
-/// by Householder reflections: the new columns span their orthogonal complement.
+/// Completes orthonormal columns `q` (each of length `len`) to an orthonormal basis:
+/// the trailing columns of the Householder Q of `[q]` span their complement.
 fn complete(q: &[Vec<f64>], len: usize) -> Vec<Vec<f64>> {
-    let k = q.len();
-    // Householder QR of the len × k matrix [q]: H_1 … H_k [q] = [R; 0].
-    let mut a: Vec<Vec<f64>> = q.to_vec();
-    let mut vs: Vec<Vec<f64>> = Vec::with_capacity(k);
-    for c in 0..k {
-        let x = &a[c][c..];
-        let norm = dot(x, x).sqrt();
-        let mut v = x.to_vec();
-        v[0] += if x[0] >= 0.0 { norm } else { -norm };
-        let vn = dot(&v, &v);
-        if vn > 0.0 {
-            for col in a.iter_mut().skip(c) {
-                let f = 2.0 * dot(&v, &col[c..]) / vn;
-                for (y, vi) in col[c..].iter_mut().zip(&v) {
-                    *y -= f * vi;
-                }
-            }
-        }
-        vs.push(v);
-    }
-    // Q = H_1 … H_k; its columns k.. span the complement.
-    (k..len)
-        .map(|e| {
-            let mut y = vec![0.0; len];
-            y[e] = 1.0;
-            for c in (0..k).rev() {
-                let v = &vs[c];
-                let vn = dot(v, v);
-                if vn > 0.0 {
-                    let f = 2.0 * dot(v, &y[c..]) / vn;
-                    for (yi, vi) in y[c..].iter_mut().zip(v) {
-                        *yi -= f * vi;
-                    }
-                }
-            }
-            y
-        })
-        .collect()
+    let (vs, _) = householder(q.to_vec());
+    (q.len()..len).map(|e| q_column(&vs, len, e)).collect()
 }
 
 /// Full SVD of `a`. Empty matrices give empty factors.

@@ -50,6 +50,17 @@ pub enum RowId {
     },
 }
 
+impl RowId {
+    /// Row `k` of `rows` rows of contact `contact`: faces, then the normal force last.
+    fn of_contact(contact: usize, k: usize, rows: usize) -> Self {
+        if k + 1 == rows {
+            RowId::NormalForce { contact }
+        } else {
+            RowId::Face { contact, face: k }
+        }
+    }
+}
+
 impl fmt::Display for RowId {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
@@ -248,16 +259,12 @@ impl TorqueQp {
                         }
                     }
                 }
-                if k + 1 == r {
-                    c0.push(model.min_normal_force[ci]);
-                    rows.push(RowId::NormalForce { contact: ci });
+                c0.push(if k + 1 == r {
+                    model.min_normal_force[ci]
                 } else {
-                    c0.push(0.0);
-                    rows.push(RowId::Face {
-                        contact: ci,
-                        face: k,
-                    });
-                }
+                    0.0
+                });
+                rows.push(RowId::of_contact(ci, k, r));
             }
         }
         // Torque limits: τ_j ≥ −τmax and −τ_j ≥ −τmax.
@@ -324,16 +331,7 @@ impl TorqueQp {
         let mut c0: Vec<f64> = vec![0.0; new_rows];
         c0[new_rows - 1] = self.model.min_normal_force[ci];
         self.c0.splice(start..end, c0);
-        let ids = (0..new_rows).map(|k| {
-            if k + 1 == new_rows {
-                RowId::NormalForce { contact: ci }
-            } else {
-                RowId::Face {
-                    contact: ci,
-                    face: k,
-                }
-            }
-        });
+        let ids = (0..new_rows).map(|k| RowId::of_contact(ci, k, new_rows));
         self.rows.splice(start..end, ids);
         let shift = new_rows as isize - old.rows as isize;
         self.contacts[ci].rows = new_rows;
@@ -440,16 +438,13 @@ impl ForceSpaceQp {
                 let mut row = vec![0.0; n];
                 row[off..off + c.dim()].copy_from_slice(faces.row(k));
                 h_rows.push(row);
-                if k + 1 == faces.nrows() {
-                    c0.push(model.min_normal_force[ci]);
-                    rows.push(RowId::NormalForce { contact: ci });
+                let r = faces.nrows();
+                c0.push(if k + 1 == r {
+                    model.min_normal_force[ci]
                 } else {
-                    c0.push(0.0);
-                    rows.push(RowId::Face {
-                        contact: ci,
-                        face: k,
-                    });
-                }
+                    0.0
+                });
+                rows.push(RowId::of_contact(ci, k, r));
             }
         }
         for (j, lim) in model.torque_limits.iter().enumerate() {
