@@ -116,12 +116,6 @@ impl ContactModel {
         }
     }
 
-    /// The size of a contact force in force units: `max(|fz|, g(f))`, which counts
-    /// `mz` as `mz/mu_torsion`.
-    pub fn normal_gauge_scale(&self, f: &[f64]) -> f64 {
-        f[self.normal_index()].abs().max(self.gauge(f))
-    }
-
     /// Scale-free margin to the exact cone: `(fz − g)/max(|fz|, g)`.
     ///
     /// 1 is a pure normal push, 0 is on the cone surface, and a negative value is

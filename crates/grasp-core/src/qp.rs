@@ -368,11 +368,6 @@ impl TorqueQp {
         }
     }
 
-    /// The linear rows of contact `ci` as faces on its force (`S_c`, fmin row last).
-    pub fn faces(&self, ci: usize) -> Matrix {
-        contact_faces(&self.model, ci, &self.constraints.cones[ci])
-    }
-
     /// Row `k` of contact `ci` applied to its force `fc`: `(S_k · fc, Σ |S_kj fc_j|)`.
     pub fn row_on_force(&self, ci: usize, k: usize, fc: &[f64]) -> (f64, f64) {
         match &self.constraints.cones[ci] {
