@@ -272,7 +272,7 @@ fn malformed_files_name_the_field() {
         (
             "both forms",
             Box::new(|p| p["fingers"] = serde_json::json!([])),
-            "two forms",
+            "more than one form",
         ),
         (
             "neither form",
@@ -280,7 +280,7 @@ fn malformed_files_name_the_field() {
                 p.as_object_mut().unwrap().remove("grasp_matrix");
                 p.as_object_mut().unwrap().remove("jacobian_transpose");
             }),
-            "two forms",
+            "three forms",
         ),
         (
             "huge number",

@@ -31,6 +31,15 @@ fn json_blocks(text: &str) -> Vec<String> {
 fn solve(text: &str, name: &str) -> serde_json::Value {
     let dir = std::env::temp_dir().join(format!("grasp-torque-readme-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
+    // The hand form names its URDF relative to the problem file, as a user's would be.
+    std::fs::copy(
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fixtures/urdf/allegro/allegro_hand_right.urdf"
+        ),
+        dir.join("allegro_hand_right.urdf"),
+    )
+    .unwrap();
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
@@ -51,8 +60,8 @@ fn every_json_example_in_the_readme_solves_as_described() {
     let blocks = json_blocks(&readme());
     assert_eq!(
         blocks.len(),
-        2,
-        "the matrix-form and geometry-form examples"
+        3,
+        "the matrix-form, geometry-form and hand-form examples"
     );
     // The matrix form is the paper's example: σ = 72.5 at N = 4, as the README says.
     let v = solve(&blocks[0], "matrix.json");
@@ -69,4 +78,23 @@ fn every_json_example_in_the_readme_solves_as_described() {
     assert_eq!(v["status"], "optimal");
     assert!(v["residuals"]["wrench"].as_f64().unwrap() < 1e-12);
     assert_eq!(v["joint_names"][0], "thumb_base");
+    // The hand form is the bundled Allegro pinch: the same grasp, the same answer.
+    let v = solve(&blocks[2], "hand.json");
+    assert_eq!(v["status"], "optimal");
+    let bundled = std::process::Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
+        .args([
+            "solve",
+            concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/fixtures/hands/allegro-pinch.json"
+            ),
+            "--format",
+            "json",
+        ])
+        .output()
+        .unwrap();
+    let bundled: serde_json::Value = serde_json::from_slice(&bundled.stdout).unwrap();
+    assert_eq!(v["objective"], bundled["objective"]);
+    assert_eq!(v["joint_names"], bundled["joint_names"]);
+    assert_eq!(v["hand"]["defaulted_joints"], serde_json::json!([]));
 }

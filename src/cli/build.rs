@@ -1,4 +1,5 @@
-//! `grasp-torque build`: a problem file (either form) printed in matrix form.
+//! `grasp-torque build`: a problem file (any form) printed in matrix form, with
+//! `joint_names` when the form knows them.
 
 use super::load;
 use anyhow::Result;
@@ -7,7 +8,7 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub(crate) struct BuildArgs {
-    /// The problem file (geometry or matrix form).
+    /// The problem file (hand, geometry or matrix form).
     problem: PathBuf,
 }
 

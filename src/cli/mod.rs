@@ -20,6 +20,7 @@ macro_rules! out {
 mod build;
 mod compare;
 mod format;
+mod hand;
 mod solve;
 mod sweep;
 // The force-space baseline is solved by the native backend.
@@ -46,8 +47,11 @@ struct Cli {
 enum Command {
     /// Solve one problem file and report torques, contact forces and checks.
     Solve(solve::SolveArgs),
-    /// Print a problem file (either form) in matrix form, ready for `solve`.
+    /// Print a problem file (any form) in matrix form, ready for `solve`.
     Build(build::BuildArgs),
+    /// List a URDF hand's links, independent joints (limits, efforts), mimic couplings
+    /// and chains: what a hand-form problem file refers to.
+    Hand(hand::HandArgs),
     /// The paper's Table 1: torques before (contact-force optimum mapped through Jᵀ)
     /// and after (torque-space optimum), per object.
     #[cfg(feature = "active-set")]
@@ -178,7 +182,17 @@ pub(crate) fn parse_list(flag: &str, text: &str) -> Result<Vec<f64>> {
 
 /// Reads a problem file, attributing errors to its path.
 pub(crate) fn load(path: &PathBuf) -> Result<GraspProblem> {
-    grasp_torque::load_problem(path).with_context(|| format!("{}", path.display()))
+    load_report(path).map(|l| l.problem)
+}
+
+/// Reads a problem file with what its form adds to reports; a hand file's warnings go
+/// to standard error.
+pub(crate) fn load_report(path: &PathBuf) -> Result<grasp_torque::Loaded> {
+    let loaded = grasp_torque::load(path).with_context(|| format!("{}", path.display()))?;
+    for w in loaded.hand.iter().flat_map(|h| &h.warnings) {
+        eprintln!("warning: {w}");
+    }
+    Ok(loaded)
 }
 
 /// Standard output could not be written.
@@ -198,6 +212,7 @@ pub(crate) fn run() -> Result<u8> {
     let code = match cli.command {
         Command::Solve(args) => solve::run(&args),
         Command::Build(args) => build::run(&args),
+        Command::Hand(args) => hand::run(&args),
         #[cfg(feature = "active-set")]
         Command::Table(args) => table::run(&args),
         Command::Compare(args) => compare::run(&args),

@@ -1,7 +1,7 @@
 //! `grasp-torque solve`.
 
 use super::format::{g, micros};
-use super::{load, parse_list, Format, ModelArgs};
+use super::{load_report, parse_list, Format, ModelArgs};
 use anyhow::Result;
 use grasp_torque::{Equilibrium, GraspSolver, Solution, Status, TorqueQp, WarmStart};
 use serde_json::json;
@@ -34,7 +34,9 @@ pub(crate) fn exit_code(s: Status) -> u8 {
 }
 
 pub(crate) fn run(args: &SolveArgs) -> Result<u8> {
-    let mut problem = load(&args.problem)?;
+    let loaded = load_report(&args.problem)?;
+    let hand = loaded.hand;
+    let mut problem = loaded.problem;
     let config = args.model.configure(&mut problem)?;
     if let Some(t) = &args.initial_torque {
         let t = parse_list("--initial-torque", t)?;
@@ -60,20 +62,28 @@ pub(crate) fn run(args: &SolveArgs) -> Result<u8> {
     let qp = solver.problem();
     let cones = config.cones.name();
     match args.format {
-        Format::Json => outln!(
-            "{}",
-            serde_json::to_string_pretty(&to_json(qp, sol, solver.backend_name(), cones))?
-        ),
-        Format::Text => out!(
-            "{}",
-            text_report(
-                &args.problem.display().to_string(),
-                qp,
-                sol,
-                solver.backend_name(),
-                cones
-            )
-        ),
+        Format::Json => {
+            let mut v = to_json(qp, sol, solver.backend_name(), cones);
+            if let (Some(h), Some(o)) = (&hand, v.as_object_mut()) {
+                o.insert("hand".into(), serde_json::to_value(h)?);
+            }
+            outln!("{}", serde_json::to_string_pretty(&v)?)
+        }
+        Format::Text => {
+            out!(
+                "{}",
+                text_report(
+                    &args.problem.display().to_string(),
+                    qp,
+                    sol,
+                    solver.backend_name(),
+                    cones
+                )
+            );
+            if let Some(h) = &hand {
+                out!("{}", hand_text(h));
+            }
+        }
     }
     Ok(exit_code(sol.status))
 }
@@ -148,6 +158,34 @@ pub(crate) fn to_json(
     v
 }
 
+/// What a hand-form problem adds to the text report.
+fn hand_text(h: &grasp_torque::hand::HandReport) -> String {
+    use std::fmt::Write;
+    let mut o = String::new();
+    let _ = writeln!(o, "\nhand        {} (robot `{}`)", h.model, h.robot);
+    if !h.defaulted_joints.is_empty() {
+        let _ = writeln!(
+            o,
+            "            at 0 (not in joint_positions): {}",
+            h.defaulted_joints.join(", ")
+        );
+    }
+    let limits = match h.torque_limits {
+        "model" => "from each joint's <limit effort>",
+        "file" => "from the file",
+        _ => "none",
+    };
+    let _ = writeln!(o, "            torque limits {limits}");
+    if !h.unlimited_joints.is_empty() {
+        let _ = writeln!(
+            o,
+            "            no effort limit: {}",
+            h.unlimited_joints.join(", ")
+        );
+    }
+    o
+}
+
 /// A force component for the report: below the problem's rounding level it is 0.
 fn component(v: f64, zero: f64) -> String {
     if v.abs() <= zero {
@@ -204,13 +242,25 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
     // Torques below the check's tolerance of the largest are rounding: shown as 0.
     let tmax = s.torque.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     let tzero = s.diagnostics.check_tolerance * tmax;
-    for (n, t) in names.iter().zip(&s.torque) {
+    let limits = &model.torque_limits;
+    for (j, (n, t)) in names.iter().zip(&s.torque).enumerate() {
         let shown = if t.abs() <= tzero {
             "0".into()
         } else {
             g(*t, 7)
         };
-        let _ = writeln!(o, "  {n:<width$}  {shown:>13}");
+        let limit = match limits.get(j).copied().flatten() {
+            Some(l) if l.is_finite() => {
+                let at = if t.abs() >= l * (1.0 - s.diagnostics.check_tolerance.sqrt()) {
+                    "  at its limit"
+                } else {
+                    ""
+                };
+                format!("   |τ| ≤ {}{at}", g(l, 4))
+            }
+            _ => String::new(),
+        };
+        let _ = writeln!(o, "  {n:<width$}  {shown:>13}{limit}");
     }
     // Components below the check's tolerance of the largest force are rounding.
     let fmax = s

@@ -27,6 +27,17 @@ pub enum ProblemError {
         /// 1-based column of the error.
         column: usize,
     },
+    /// A robot description (a URDF) that cannot be used, naming the file, the element
+    /// and what is wrong with it.
+    #[error("{file}: {element}: {message}")]
+    RobotModel {
+        /// The robot description's path, as given.
+        file: String,
+        /// The element at fault, such as `<joint name="j1"> (line 12)`.
+        element: String,
+        /// What is wrong.
+        message: String,
+    },
     /// A field has a value the model cannot use.
     #[error("{field}: expected {expected}, got {found}")]
     Invalid {

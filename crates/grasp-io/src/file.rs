@@ -43,6 +43,12 @@ pub struct ContactSpec {
 impl ContactSpec {
     /// Converts to a model, naming `field` (such as `contacts[2]`) in errors.
     pub fn to_model(&self, field: &str) -> Result<ContactModel, ProblemError> {
+        self.to_model_named(|| field.to_string())
+    }
+
+    /// [`Self::to_model`] with the field named only on failure (no allocation on the
+    /// way to a valid model).
+    pub fn to_model_named(&self, field: impl Fn() -> String) -> Result<ContactModel, ProblemError> {
         let name = match self.model {
             ModelName::Fpc => "fpc",
             ModelName::Pcwf => "pcwf",
@@ -52,7 +58,7 @@ impl ContactSpec {
         let need = |v: Option<f64>, what: &str| {
             v.ok_or_else(|| {
                 ProblemError::invalid(
-                    format!("{field}.{what}"),
+                    format!("{}.{what}", field()),
                     format!("a number > 0 (model {name} needs it)"),
                     "nothing",
                 )
@@ -60,7 +66,7 @@ impl ContactSpec {
         };
         let unused = |v: Option<f64>, what: &str| match v {
             Some(x) => Err(ProblemError::invalid(
-                format!("{field}.{what}"),
+                format!("{}.{what}", field()),
                 format!("no {what} for model {name}, which does not use it"),
                 x,
             )),
@@ -89,7 +95,7 @@ impl ContactSpec {
         };
         model.validate().map_err(|e| {
             ProblemError::invalid(
-                format!("{field}.{}", e.field),
+                format!("{}.{}", field(), e.field),
                 format!("a number from {:e} to {:e}", e.range.0, e.range.1),
                 e.value,
             )
@@ -180,6 +186,9 @@ pub struct MatrixFile {
     /// `compliance` (default), `euclidean` or `free`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub internal_forces: Option<InternalForces>,
+    /// One name per row of `jacobian_transpose`, echoed in reports.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_names: Option<Vec<String>>,
 }
 
 impl MatrixFile {
@@ -198,6 +207,7 @@ impl MatrixFile {
             min_normal_force: p.min_normal_force.as_ref().map(|v| serde_json::json!(v)),
             initial_torque: p.initial_torque.clone(),
             internal_forces: Some(p.internal_forces),
+            joint_names: (!p.joint_names.is_empty()).then(|| p.joint_names.clone()),
         }
     }
 
@@ -213,6 +223,7 @@ impl MatrixFile {
             .map(|(i, c)| c.to_model(&format!("contacts[{i}]")))
             .collect::<Result<Vec<_>, _>>()?;
         let mut p = GraspProblem::new(g, jt, wrench, contacts);
+        p.joint_names = self.joint_names.unwrap_or_default();
         Options {
             linearization: self.linearization,
             torque_weights: self.torque_weights,
@@ -323,9 +334,26 @@ pub fn from_json_str<'de, T: Deserialize<'de>>(text: &'de str) -> Result<T, Prob
     Ok(value)
 }
 
+/// A problem as read from a file, with what its form adds to reports.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    /// The validated problem.
+    pub problem: GraspProblem,
+    /// For the hand form: the robot, the joints that defaulted to 0, the source of the
+    /// torque limits and the warnings.
+    pub hand: Option<crate::hand::HandReport>,
+}
+
 /// Parses a problem file's text, in matrix form (`grasp_matrix`, `jacobian_transpose`)
-/// or geometry form (`contacts` with positions, and `fingers`).
+/// or geometry form (`contacts` with positions, and `fingers`). A hand-form file's
+/// relative robot path is taken from the working directory; see [`parse_problem_at`].
 pub fn parse_problem(text: &str) -> Result<GraspProblem, ProblemError> {
+    parse_problem_at(text, Path::new(".")).map(|l| l.problem)
+}
+
+/// Parses a problem file's text in any of the three forms; a hand-form file's relative
+/// `hand.model` is taken relative to `base` (the problem file's folder).
+pub fn parse_problem_at(text: &str, base: &Path) -> Result<Loaded, ProblemError> {
     let value: serde_json::Value = from_json_str(text)?;
     let Some(obj) = value.as_object() else {
         return Err(ProblemError::invalid(
@@ -336,13 +364,29 @@ pub fn parse_problem(text: &str) -> Result<GraspProblem, ProblemError> {
     };
     let matrix = obj.contains_key("grasp_matrix") || obj.contains_key("jacobian_transpose");
     let geometry = obj.contains_key("fingers");
-    match (matrix, geometry) {
-        (true, false) => from_json_str::<MatrixFile>(text)?.into_problem(),
-        (false, true) => from_json_str::<crate::geometry::GeometryFile>(text)?.into_problem(),
+    let hand = obj.contains_key("hand");
+    let plain = |problem| Loaded {
+        problem,
+        hand: None,
+    };
+    match (matrix, geometry, hand) {
+        (true, false, false) => from_json_str::<MatrixFile>(text)?
+            .into_problem()
+            .map(plain),
+        (false, true, false) => from_json_str::<crate::geometry::GeometryFile>(text)?
+            .into_problem()
+            .map(plain),
+        (false, false, true) => {
+            let built = from_json_str::<crate::hand::HandFile>(text)?.into_problem(base)?;
+            Ok(Loaded {
+                problem: built.problem,
+                hand: Some(built.report),
+            })
+        }
         _ => Err(ProblemError::invalid(
             "(top level)",
-            "one of the two forms: matrix form with grasp_matrix and jacobian_transpose, or geometry form with fingers (and contacts with position and normal)",
-            if matrix { "fields of both forms" } else { "neither grasp_matrix nor fingers" },
+            "one of the three forms: matrix form with grasp_matrix and jacobian_transpose, geometry form with fingers, or hand form with hand (a URDF and joint positions)",
+            if matrix || geometry || hand { "fields of more than one form" } else { "none of grasp_matrix, fingers or hand" },
         )),
     }
 }
@@ -392,5 +436,12 @@ pub fn read_limited(path: &Path) -> Result<String, ProblemError> {
 
 /// Reads and parses a problem file.
 pub fn load_problem(path: impl AsRef<Path>) -> Result<GraspProblem, ProblemError> {
-    parse_problem(&read_limited(path.as_ref())?)
+    load(path).map(|l| l.problem)
+}
+
+/// Reads and parses a problem file in any form, with what the form adds to reports.
+pub fn load(path: impl AsRef<Path>) -> Result<Loaded, ProblemError> {
+    let path = path.as_ref();
+    let base = path.parent().unwrap_or(Path::new("."));
+    parse_problem_at(&read_limited(path)?, base)
 }

@@ -169,17 +169,22 @@ fn label(kind: &str, i: usize, name: &Option<String>) -> String {
     }
 }
 
-fn check_vec(field: String, v: [f64; 3], unit: bool) -> Result<(), ProblemError> {
+/// Checks a 3-vector (and its length when `unit`); `field` is called only on failure.
+pub(crate) fn check_vec(
+    field: impl FnOnce() -> String,
+    v: [f64; 3],
+    unit: bool,
+) -> Result<(), ProblemError> {
     if v.iter().any(|x| x.is_nan() || x.abs() > MAX_MAGNITUDE) {
         return Err(ProblemError::invalid(
-            field,
+            field(),
             format!("three finite numbers of magnitude at most {MAX_MAGNITUDE:e}"),
             format!("{v:?}"),
         ));
     }
     if unit && (norm3(v) - 1.0).abs() > UNIT_TOLERANCE {
         return Err(ProblemError::invalid(
-            field,
+            field(),
             format!("a unit vector (length 1 ± {UNIT_TOLERANCE:e}; normalise it yourself, it is not done silently)"),
             format!("length {}", norm3(v)),
         ));
@@ -229,8 +234,8 @@ impl GeometryFile {
                     Some(n) => format!("{at} ({n})"),
                     None => at,
                 };
-                check_vec(format!("{at}.origin"), joint.origin, false)?;
-                check_vec(format!("{at}.axis"), joint.axis, true)?;
+                check_vec(|| format!("{at}.origin"), joint.origin, false)?;
+                check_vec(|| format!("{at}.axis"), joint.axis, true)?;
             }
         }
         if self.contacts.is_empty() {
@@ -245,8 +250,8 @@ impl GeometryFile {
         let mut jt_cols: Vec<Vec<f64>> = Vec::new();
         for (i, c) in self.contacts.iter().enumerate() {
             let at = label("contacts", i, &c.name);
-            check_vec(format!("{at}.position"), c.position, false)?;
-            check_vec(format!("{at}.normal"), c.normal, true)?;
+            check_vec(|| format!("{at}.position"), c.position, false)?;
+            check_vec(|| format!("{at}.normal"), c.normal, true)?;
             let spec = crate::file::ContactSpec {
                 model: c.model,
                 mu: c.mu,

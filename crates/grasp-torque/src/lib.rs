@@ -1,7 +1,10 @@
 #![doc = include_str!("../../../README.md")]
 
 pub use grasp_core::*;
-pub use grasp_io::{file, geometry, load_problem, parse_problem};
+pub use grasp_io::{
+    file, geometry, hand, load, load_problem, parse_problem, parse_problem_at, urdf, HandFile,
+    Loaded, Robot,
+};
 
 #[cfg(feature = "active-set")]
 pub use grasp_active_set::{ActiveSetSettings, ActiveSetSolver, ForceSpaceSolver, Phase1};

@@ -1,0 +1,487 @@
+//! The hand form: a robot description (URDF), joint positions, an object pose and
+//! contacts on named links. Forward kinematics gives every joint's frame; G and Jᵀ then
+//! follow the geometry form's convention (`docs/geometry.md`), in the object frame, and
+//! mimic couplings reduce Jᵀ to the independent joints (`Jᵀ = Pᵀ Jᵀ_full`).
+//!
+//! The problem's joints are the independent joints that move at least one contact, in
+//! the order of their `<joint>` elements in the URDF. A mimic joint's motion is credited
+//! to the independent joint at the end of its mimic chain, scaled by the product of the
+//! multipliers.
+
+use crate::file::{ModelName, Options};
+use crate::geometry::{check_vec, contact_frame, UNIT_TOLERANCE};
+use crate::urdf::{nearest, JointKind, Robot};
+use grasp_core::contact::ContactModel;
+use grasp_core::error::ProblemError;
+use grasp_core::matrix::Matrix;
+use grasp_core::problem::{GraspProblem, MAX_CONTACTS, MAX_JOINTS, MAX_MAGNITUDE};
+use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// `hand`: which robot, in which configuration.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HandSpec {
+    /// A URDF path; a relative path is relative to the problem file.
+    pub model: String,
+    /// Positions of independent joints by name, in radians (revolute, continuous) or
+    /// metres (prismatic). A joint not listed sits at 0.
+    #[serde(default)]
+    pub joint_positions: BTreeMap<String, f64>,
+}
+
+/// The object frame in the robot's root-link frame.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectPose {
+    /// Origin of the object frame (default 0).
+    #[serde(default)]
+    pub position: [f64; 3],
+    /// Orientation as a unit quaternion `[w, x, y, z]` (default identity).
+    #[serde(default = "identity")]
+    pub quaternion: [f64; 4],
+}
+
+fn identity() -> [f64; 4] {
+    [1.0, 0.0, 0.0, 0.0]
+}
+
+impl Default for ObjectPose {
+    fn default() -> Self {
+        Self {
+            position: [0.0; 3],
+            quaternion: identity(),
+        }
+    }
+}
+
+/// The frame a contact's position and normal are given in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ContactFrame {
+    /// The object frame (default).
+    #[default]
+    Object,
+    /// The frame of the contact's `link`, as tactile sensors report.
+    Link,
+}
+
+/// One contact on a link of the hand.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HandContact {
+    /// Optional name, used in messages.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The link that touches: every moving joint from the root to it moves the contact.
+    pub link: String,
+    /// Contact point.
+    pub position: [f64; 3],
+    /// Unit normal, pointing into the object.
+    pub normal: [f64; 3],
+    /// `object` (default) or `link`: the frame of `position` and `normal`.
+    #[serde(default)]
+    pub frame: ContactFrame,
+    /// `fpc`, `pcwf`, `sfcl` or `sfce`.
+    pub model: ModelName,
+    /// Tangential friction coefficient.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu: Option<f64>,
+    /// Torsional friction coefficient, a length.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu_torsion: Option<f64>,
+}
+
+/// A problem file in hand form.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HandFile {
+    /// Free-text name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Free-text description.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// The robot and its configuration.
+    pub hand: HandSpec,
+    /// The object frame in the root-link frame (default identity).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub object_pose: Option<ObjectPose>,
+    /// The contacts; their order is the column order of G.
+    pub contacts: Vec<HandContact>,
+    /// `[Fx Fy Fz Mx My Mz]` in the object frame, about its origin.
+    pub wrench: Vec<f64>,
+    /// See the matrix form.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub linearization: Option<grasp_core::cone::Linearization>,
+    /// See the matrix form.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torque_weights: Option<Vec<f64>>,
+    /// `"model"` for each joint's `<limit effort>`, or a list as in the matrix form.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torque_limits: Option<serde_json::Value>,
+    /// See the matrix form.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_normal_force: Option<serde_json::Value>,
+    /// See the matrix form.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_torque: Option<Vec<f64>>,
+    /// See the matrix form.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub internal_forces: Option<grasp_core::model::InternalForces>,
+}
+
+/// What a hand-form problem was built from, for reports.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct HandReport {
+    /// The URDF path, as written in the file.
+    pub model: String,
+    /// `<robot name>`.
+    pub robot: String,
+    /// The problem's joints that were not in `joint_positions` and sit at 0.
+    pub defaulted_joints: Vec<String>,
+    /// Where the torque limits came from: `"model"` (`<limit effort>`), `"file"` or
+    /// `"none"`.
+    pub torque_limits: &'static str,
+    /// The problem's joints without a usable `<limit effort>`, when limits come from
+    /// the model: they are unlimited.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub unlimited_joints: Vec<String>,
+    /// What was loaded but ignored, or looks wrong (one line each).
+    pub warnings: Vec<String>,
+}
+
+/// A hand-form problem, built.
+#[derive(Clone, Debug)]
+pub struct HandProblem {
+    /// The problem in matrix form, with `joint_names`.
+    pub problem: GraspProblem,
+    /// How it was built.
+    pub report: HandReport,
+}
+
+fn label(i: usize, name: &Option<String>) -> String {
+    match name {
+        Some(n) => format!("contacts[{i}] ({n})"),
+        None => format!("contacts[{i}]"),
+    }
+}
+
+impl HandFile {
+    /// Loads the robot (a relative `hand.model` is taken relative to `base`, the
+    /// problem file's folder) and builds the problem.
+    pub fn into_problem(self, base: &Path) -> Result<HandProblem, ProblemError> {
+        let path = base.join(&self.hand.model);
+        let robot = Robot::load(&path).map_err(|e| match e {
+            ProblemError::Io { path, error } => ProblemError::invalid(
+                "hand.model",
+                "a readable URDF file (a relative path is relative to the problem file)",
+                format!("{path}: {error}"),
+            ),
+            other => other,
+        })?;
+        self.build(&robot)
+    }
+
+    /// Builds the problem on an already parsed robot: what a planner that poses many
+    /// grasps of one hand calls.
+    pub fn build(&self, robot: &Robot) -> Result<HandProblem, ProblemError> {
+        let mut warnings = robot.warnings.clone();
+        if self.contacts.is_empty() {
+            return Err(ProblemError::invalid(
+                "contacts",
+                "at least one contact",
+                "an empty list",
+            ));
+        }
+        if self.contacts.len() > MAX_CONTACTS {
+            return Err(ProblemError::invalid(
+                "contacts",
+                format!("at most {MAX_CONTACTS} contacts"),
+                format!("{} contacts", self.contacts.len()),
+            ));
+        }
+        // Independent coordinates.
+        let mut q_ind = vec![0.0; robot.independent.len()];
+        let mut given = vec![false; robot.independent.len()];
+        for (name, &value) in &self.hand.joint_positions {
+            let field = format!("hand.joint_positions.{name}");
+            let Some(j) = robot.joint(name) else {
+                return Err(ProblemError::invalid(
+                    field,
+                    format!(
+                        "a joint of {} ({})",
+                        robot.source,
+                        nearest(
+                            name,
+                            robot
+                                .independent
+                                .iter()
+                                .map(|&j| robot.joints[j].name.as_str())
+                        )
+                    ),
+                    "a name the model does not have",
+                ));
+            };
+            let joint = &robot.joints[j];
+            if joint.kind == JointKind::Fixed {
+                return Err(ProblemError::invalid(
+                    field,
+                    "an independent joint (this one is fixed and has no position)",
+                    value,
+                ));
+            }
+            if let Some(m) = joint.mimic {
+                return Err(ProblemError::invalid(
+                    field,
+                    format!(
+                        "an independent joint: this one mimics `{}`, so set that joint's position",
+                        robot.joints[m.leader].name
+                    ),
+                    value,
+                ));
+            }
+            if !value.is_finite() || value.abs() > MAX_MAGNITUDE {
+                return Err(ProblemError::invalid(
+                    field,
+                    format!("a finite position of magnitude at most {MAX_MAGNITUDE:e}"),
+                    value,
+                ));
+            }
+            let k = robot.coupling[j]
+                .expect("a moving joint has a coupling")
+                .independent;
+            q_ind[k] = value;
+            given[k] = true;
+            let (lo, hi) = (joint.lower, joint.upper);
+            if lo.is_some_and(|l| value < l) || hi.is_some_and(|h| value > h) {
+                warnings.push(format!(
+                    "hand.joint_positions.{name} = {value} is outside the joint's limits [{}, {}] (radians or metres)",
+                    lo.map_or("-inf".into(), |l| l.to_string()),
+                    hi.map_or("inf".into(), |h| h.to_string())
+                ));
+            }
+        }
+        let pose = self.object_pose.unwrap_or_default();
+        check_vec(|| "object_pose.position".into(), pose.position, false)?;
+        let [w, x, y, z] = pose.quaternion;
+        let qn = (w * w + x * x + y * y + z * z).sqrt();
+        if !qn.is_finite() || (qn - 1.0).abs() > UNIT_TOLERANCE {
+            return Err(ProblemError::invalid(
+                "object_pose.quaternion",
+                format!("a unit quaternion [w, x, y, z] (length 1 ± {UNIT_TOLERANCE:e})"),
+                format!("{:?} (length {qn})", pose.quaternion),
+            ));
+        }
+        let object = Isometry3::from_parts(
+            Translation3::from(Vector3::from(pose.position)),
+            UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
+        );
+        let to_object = object.inverse();
+        let frames = robot.pose(&q_ind);
+
+        // Contacts in the object frame, with the joints that move them.
+        struct Placed {
+            p: Vector3<f64>,
+            n: Vector3<f64>,
+            model: ContactModel,
+            chain: Vec<usize>,
+        }
+        let mut placed = Vec::with_capacity(self.contacts.len());
+        let mut used = vec![false; robot.independent.len()];
+        for (i, c) in self.contacts.iter().enumerate() {
+            let at = || label(i, &c.name);
+            let link = robot.link(&c.link).ok_or_else(|| {
+                ProblemError::invalid(
+                    format!("{}.link", at()),
+                    format!(
+                        "a link of {} ({})",
+                        robot.source,
+                        nearest(&c.link, robot.links.iter().map(String::as_str))
+                    ),
+                    format!("`{}`", c.link),
+                )
+            })?;
+            check_vec(|| format!("{}.position", at()), c.position, false)?;
+            check_vec(|| format!("{}.normal", at()), c.normal, true)?;
+            let model = crate::file::ContactSpec {
+                model: c.model,
+                mu: c.mu,
+                mu_torsion: c.mu_torsion,
+            }
+            .to_model_named(at)?;
+            let (p, n) = match c.frame {
+                ContactFrame::Object => (Vector3::from(c.position), Vector3::from(c.normal)),
+                ContactFrame::Link => {
+                    let to = to_object * frames.links[link];
+                    (
+                        (to * Point3::from(c.position)).coords,
+                        to.rotation * Vector3::from(c.normal),
+                    )
+                }
+            };
+            if p.iter().any(|v| v.abs() > MAX_MAGNITUDE) {
+                return Err(ProblemError::invalid(
+                    format!("{}.position", at()),
+                    format!("a point within {MAX_MAGNITUDE:e} of the object origin"),
+                    format!("{:?} in the object frame", p.as_slice()),
+                ));
+            }
+            let chain: Vec<usize> = robot
+                .chain(link)
+                .into_iter()
+                .filter(|&j| robot.joints[j].kind != JointKind::Fixed)
+                .collect();
+            for &j in &chain {
+                used[robot.coupling[j].expect("moving").independent] = true;
+            }
+            // The frame convention normalises n exactly, as the geometry form does.
+            placed.push(Placed {
+                p,
+                n: n.normalize(),
+                model,
+                chain,
+            });
+        }
+        let rows: Vec<usize> = (0..robot.independent.len()).filter(|&k| used[k]).collect();
+        if rows.is_empty() {
+            return Err(ProblemError::invalid(
+                "contacts",
+                "at least one contact on a link that a moving joint moves",
+                "contacts only on links fixed to the root",
+            ));
+        }
+        if rows.len() > MAX_JOINTS {
+            return Err(ProblemError::invalid(
+                "contacts",
+                format!("contacts moved by at most {MAX_JOINTS} independent joints in all"),
+                format!("{} joints", rows.len()),
+            ));
+        }
+        let mut row_of = vec![usize::MAX; robot.independent.len()];
+        for (r, &k) in rows.iter().enumerate() {
+            row_of[k] = r;
+        }
+        // Joint axes and origins in the object frame.
+        let axes: Vec<(Vector3<f64>, Vector3<f64>)> = robot
+            .joints
+            .iter()
+            .zip(&frames.joints)
+            .map(|(j, f)| {
+                let t = to_object * f;
+                (t.rotation * j.axis.into_inner(), t.translation.vector)
+            })
+            .collect();
+        let mut g_cols: Vec<[f64; 6]> = Vec::new();
+        let mut jt_cols: Vec<Vec<f64>> = Vec::new();
+        let mut models = Vec::with_capacity(placed.len());
+        for c in &placed {
+            let [t1, t2, n] = contact_frame([c.n.x, c.n.y, c.n.z]);
+            let n = Vector3::from(n);
+            let dirs: Vec<Vector3<f64>> = match c.model {
+                ContactModel::Fpc => vec![n],
+                _ => vec![Vector3::from(t1), Vector3::from(t2), n],
+            };
+            let mut column = |d: Vector3<f64>, torsion: bool| {
+                let moment = if torsion { d } else { c.p.cross(&d) };
+                let force = if torsion { Vector3::zeros() } else { d };
+                g_cols.push([force.x, force.y, force.z, moment.x, moment.y, moment.z]);
+                let mut col = vec![0.0; rows.len()];
+                for &j in &c.chain {
+                    let (a, o) = &axes[j];
+                    let entry = match (robot.joints[j].kind.rotates(), torsion) {
+                        (true, false) => d.dot(&a.cross(&(c.p - o))),
+                        (true, true) => d.dot(a),
+                        (false, false) => d.dot(a),
+                        (false, true) => 0.0,
+                    };
+                    let cp = robot.coupling[j].expect("moving");
+                    col[row_of[cp.independent]] += cp.multiplier * entry;
+                }
+                jt_cols.push(col);
+            };
+            for &d in &dirs {
+                column(d, false);
+            }
+            if c.model.dim() == 4 {
+                column(n, true);
+            }
+            models.push(c.model);
+        }
+        let nf = g_cols.len();
+        let g = Matrix::from_fn(6, nf, |r, c| g_cols[c][r]);
+        let jt = Matrix::from_fn(rows.len(), nf, |r, c| jt_cols[c][r]);
+        let wrench = crate::file::wrench6(&self.wrench)?;
+        let mut p = GraspProblem::new(g, jt, wrench, models);
+        let name_of = |k: usize| robot.joints[robot.independent[k]].name.clone();
+        p.joint_names = rows.iter().map(|&k| name_of(k)).collect();
+
+        let mut unlimited_joints = Vec::new();
+        let (torque_limits, limits_from) = match &self.torque_limits {
+            None | Some(serde_json::Value::Null) => (None, "none"),
+            Some(serde_json::Value::String(s)) if s == "model" => {
+                let limits: Vec<Option<f64>> = rows
+                    .iter()
+                    .map(|&k| robot.joints[robot.independent[k]].effort)
+                    .collect();
+                for (r, l) in limits.iter().enumerate() {
+                    if l.is_none() {
+                        unlimited_joints.push(p.joint_names[r].clone());
+                    }
+                }
+                if !unlimited_joints.is_empty() {
+                    warnings.push(format!(
+                        "torque_limits \"model\": no positive <limit effort> for {}; unlimited",
+                        unlimited_joints.join(", ")
+                    ));
+                }
+                (Some(limits), "model")
+            }
+            Some(v @ serde_json::Value::Array(_)) => {
+                let limits: Vec<Option<f64>> = serde_json::from_value(v.clone()).map_err(|_| {
+                    ProblemError::invalid(
+                        "torque_limits",
+                        "\"model\", or a list with one number > 0 or null per joint",
+                        v,
+                    )
+                })?;
+                (Some(limits), "file")
+            }
+            Some(other) => {
+                return Err(ProblemError::invalid(
+                    "torque_limits",
+                    "\"model\" (each joint's <limit effort>), or a list with one number > 0 or null per joint",
+                    other,
+                ))
+            }
+        };
+        Options {
+            linearization: self.linearization,
+            torque_weights: self.torque_weights.clone(),
+            torque_limits,
+            min_normal_force: self.min_normal_force.clone(),
+            initial_torque: self.initial_torque.clone(),
+            internal_forces: self.internal_forces,
+        }
+        .apply(&mut p)?;
+        p.validate()?;
+        let defaulted_joints = rows
+            .iter()
+            .filter(|&&k| !given[k])
+            .map(|&k| name_of(k))
+            .collect();
+        Ok(HandProblem {
+            problem: p,
+            report: HandReport {
+                model: self.hand.model.clone(),
+                robot: robot.name.clone(),
+                defaulted_joints,
+                torque_limits: limits_from,
+                unlimited_joints,
+                warnings,
+            },
+        })
+    }
+}

@@ -1,0 +1,843 @@
+//! Robot descriptions in URDF: the kinematic tree of a hand, its independent joints and
+//! mimic couplings, forward kinematics and joint frames.
+//!
+//! Parsing is [`urdf_rs`]'s, after a pass with `roxmltree` that records where each
+//! element is (for messages) and drops what statics never reads: `<inertial>`,
+//! `<visual>`, `<collision>`, `<calibration>`, `<dynamics>` and `<safety_controller>`.
+//! Malformed or duplicated inertial data therefore loads, with a warning, and meshes are
+//! never opened. Everything the kinematics uses is checked: every error names the file,
+//! the element and the problem.
+//!
+//! Frames follow the URDF specification: a joint's frame is its parent link's frame
+//! moved by `<origin xyz rpy>` (roll, pitch, yaw about the fixed x, y, z axes, so
+//! `R = Rz(yaw) Ry(pitch) Rx(roll)`); the joint moves its child link about (revolute,
+//! continuous) or along (prismatic) its unit `<axis>`, given in the joint frame. A mimic
+//! joint follows `q = multiplier · q_leader + offset`; chains of mimics are resolved to
+//! the independent joint at their end.
+
+use grasp_core::error::ProblemError;
+use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Most links a robot description may have: far above any hand (a humanoid has about
+/// a hundred), and it bounds the work of a hostile file.
+pub const MAX_LINKS: usize = 10_000;
+
+/// Deepest element nesting read: a URDF nests five or six levels.
+pub const MAX_DEPTH: usize = 64;
+
+/// The kind of a joint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JointKind {
+    /// Rotation about the axis, within limits.
+    Revolute,
+    /// Rotation about the axis, without limits.
+    Continuous,
+    /// Translation along the axis.
+    Prismatic,
+    /// No motion: folded into the chain.
+    Fixed,
+}
+
+impl JointKind {
+    /// The URDF name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Revolute => "revolute",
+            Self::Continuous => "continuous",
+            Self::Prismatic => "prismatic",
+            Self::Fixed => "fixed",
+        }
+    }
+
+    /// Whether the joint rotates (revolute or continuous).
+    pub fn rotates(self) -> bool {
+        matches!(self, Self::Revolute | Self::Continuous)
+    }
+}
+
+/// `q = multiplier · q_leader + offset`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mimic {
+    /// The joint followed (index into [`Robot::joints`]), as written in the file.
+    pub leader: usize,
+    /// Multiplier (default 1).
+    pub multiplier: f64,
+    /// Offset, in radians or metres (default 0).
+    pub offset: f64,
+}
+
+/// How a moving joint follows the independent coordinates: `q = multiplier ·
+/// q_ind[independent] + offset`, with mimic chains resolved.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coupling {
+    /// Index into [`Robot::independent`].
+    pub independent: usize,
+    /// Product of the multipliers along the mimic chain (1 for an independent joint).
+    pub multiplier: f64,
+    /// Offset accumulated along the chain (0 for an independent joint).
+    pub offset: f64,
+}
+
+/// One joint of the description.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Joint {
+    /// Its name.
+    pub name: String,
+    /// Its kind.
+    pub kind: JointKind,
+    /// The joint frame in the parent link's frame (`<origin>`).
+    pub origin: Isometry3<f64>,
+    /// The unit axis in the joint frame (normalised from `<axis xyz>`).
+    pub axis: Unit<Vector3<f64>>,
+    /// Parent link (index into [`Robot::links`]).
+    pub parent: usize,
+    /// Child link.
+    pub child: usize,
+    /// `<limit effort>` when given, finite and positive: N·m or N.
+    pub effort: Option<f64>,
+    /// `<limit lower>`, when the joint has a finite one.
+    pub lower: Option<f64>,
+    /// `<limit upper>`, when the joint has a finite one.
+    pub upper: Option<f64>,
+    /// `<mimic>`, when the joint follows another.
+    pub mimic: Option<Mimic>,
+    /// Line of the `<joint>` element.
+    pub line: u32,
+}
+
+/// A parsed, checked kinematic tree.
+#[derive(Clone, Debug)]
+pub struct Robot {
+    /// `<robot name>`.
+    pub name: String,
+    /// The file, as given, for messages.
+    pub source: String,
+    /// Link names, in file order.
+    pub links: Vec<String>,
+    /// Joints, in file order.
+    pub joints: Vec<Joint>,
+    /// The root link: the one that is no joint's child.
+    pub root: usize,
+    /// The joints that are neither fixed nor mimic, in file order: the coordinates
+    /// `q_ind` a configuration is given in.
+    pub independent: Vec<usize>,
+    /// Per joint: how it follows `q_ind` (`None` for fixed joints).
+    pub coupling: Vec<Option<Coupling>>,
+    /// What was loaded but ignored, one line each (malformed or duplicated inertial
+    /// data, an effort of zero).
+    pub warnings: Vec<String>,
+    /// Per link: the joint whose child it is (`None` for the root).
+    parent_joint: Vec<Option<usize>>,
+    /// Links from the root outwards: every parent comes before its children.
+    order: Vec<usize>,
+    link_lines: Vec<u32>,
+}
+
+/// The frames of every link and joint at one configuration, in the root link's frame.
+#[derive(Clone, Debug)]
+pub struct Pose {
+    /// Per link: its frame.
+    pub links: Vec<Isometry3<f64>>,
+    /// Per joint: its frame (the parent link's frame moved by `<origin>`, before the
+    /// joint's own motion).
+    pub joints: Vec<Isometry3<f64>>,
+}
+
+fn robot_error(file: &str, element: impl Into<String>, message: impl Into<String>) -> ProblemError {
+    ProblemError::RobotModel {
+        file: file.to_string(),
+        element: element.into(),
+        message: message.into(),
+    }
+}
+
+/// Levenshtein distance, for "did you mean" lists.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let cur = row[j + 1];
+            row[j + 1] = (prev + usize::from(ca != cb)).min(row[j] + 1).min(cur + 1);
+            prev = cur;
+        }
+    }
+    row[b.len()]
+}
+
+/// Up to three of `names` nearest to `name`, as a readable list.
+pub fn nearest<'a>(name: &str, names: impl IntoIterator<Item = &'a str>) -> String {
+    let mut scored: Vec<(usize, &str)> = names
+        .into_iter()
+        .map(|n| (edit_distance(name, n), n))
+        .collect();
+    scored.sort();
+    scored.dedup();
+    let list: Vec<String> = scored
+        .iter()
+        .take(3)
+        .map(|(_, n)| format!("`{n}`"))
+        .collect();
+    if list.is_empty() {
+        "there are none".into()
+    } else {
+        format!("nearest: {}", list.join(", "))
+    }
+}
+
+/// Elements statics never reads: dropped before `urdf_rs` sees the text.
+const IGNORED_IN_LINK: [&str; 3] = ["inertial", "visual", "collision"];
+const IGNORED_IN_JOINT: [&str; 3] = ["calibration", "dynamics", "safety_controller"];
+
+/// A joint's `<limit>`, read here rather than by urdf-rs, which requires `effort` and
+/// `velocity` (statics needs neither).
+#[derive(Clone, Copy, Debug, Default)]
+struct Limit {
+    lower: Option<f64>,
+    upper: Option<f64>,
+    effort: Option<f64>,
+}
+const JOINT_TYPES: [&str; 7] = [
+    "revolute",
+    "continuous",
+    "prismatic",
+    "fixed",
+    "floating",
+    "planar",
+    "spherical",
+];
+
+/// What the `roxmltree` pass learns: element lines, warnings, and the text to parse.
+struct Scan {
+    text: String,
+    link_lines: HashMap<String, u32>,
+    joint_lines: HashMap<String, u32>,
+    limits: HashMap<String, Limit>,
+    warnings: Vec<String>,
+}
+
+/// Numbers of an attribute, each finite, or an error naming the element.
+fn numbers<const N: usize>(
+    file: &str,
+    at: &str,
+    element: roxmltree::Node,
+    attr: &str,
+) -> Result<Option<[f64; N]>, ProblemError> {
+    let Some(text) = element.attribute(attr) else {
+        return Ok(None);
+    };
+    let values: Vec<Option<f64>> = text
+        .split_whitespace()
+        .map(|v| v.parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect();
+    match <[Option<f64>; N]>::try_from(values) {
+        Ok(v) if v.iter().all(Option::is_some) => Ok(Some(v.map(|x| x.unwrap_or_default()))),
+        _ => Err(robot_error(
+            file,
+            at,
+            format!(
+                "<{} {attr}=\"{text}\">: expected {N} finite number{}",
+                element.tag_name().name(),
+                if N == 1 { "" } else { "s" }
+            ),
+        )),
+    }
+}
+
+fn scan(text: &str, file: &str) -> Result<Scan, ProblemError> {
+    let doc = roxmltree::Document::parse(text)
+        .map_err(|e| robot_error(file, "(document)", format!("not well-formed XML: {e}")))?;
+    let robot = doc.root_element();
+    let line = |n: roxmltree::Node| doc.text_pos_at(n.range().start).row;
+    if robot.tag_name().name() != "robot" {
+        return Err(robot_error(
+            file,
+            format!("<{}> (line {})", robot.tag_name().name(), line(robot)),
+            "expected a <robot> element at the top level (a URDF)",
+        ));
+    }
+    // The URDF reader recurses per level; no robot description nests this deep.
+    let mut stack = vec![(robot, 1usize)];
+    while let Some((node, depth)) = stack.pop() {
+        if depth > MAX_DEPTH {
+            return Err(robot_error(
+                file,
+                format!("<{}> (line {})", node.tag_name().name(), line(node)),
+                format!("elements nested more than {MAX_DEPTH} deep"),
+            ));
+        }
+        stack.extend(
+            node.children()
+                .filter(|n| n.is_element())
+                .map(|n| (n, depth + 1)),
+        );
+    }
+    let mut cut: Vec<std::ops::Range<usize>> = Vec::new();
+    let mut link_lines = HashMap::new();
+    let mut joint_lines = HashMap::new();
+    let mut limits = HashMap::new();
+    let mut warnings = Vec::new();
+    let mut links = 0usize;
+    for e in robot.children().filter(|n| n.is_element()) {
+        let tag = e.tag_name().name();
+        if tag != "link" && tag != "joint" {
+            continue;
+        }
+        let Some(name) = e.attribute("name") else {
+            return Err(robot_error(
+                file,
+                format!("<{tag}> (line {})", line(e)),
+                "has no name attribute",
+            ));
+        };
+        let at = format!("<{tag} name=\"{name}\"> (line {})", line(e));
+        let lines = if tag == "link" {
+            links += 1;
+            if links > MAX_LINKS {
+                return Err(robot_error(
+                    file,
+                    at,
+                    format!("more than {MAX_LINKS} links; a hand has far fewer"),
+                ));
+            }
+            &mut link_lines
+        } else {
+            &mut joint_lines
+        };
+        if let Some(first) = lines.insert(name.to_string(), line(e)) {
+            return Err(robot_error(
+                file,
+                at,
+                format!("a second {tag} of this name (the first is on line {first})"),
+            ));
+        }
+        let ignored: &[&str] = if tag == "link" {
+            &IGNORED_IN_LINK
+        } else {
+            &IGNORED_IN_JOINT
+        };
+        let mut inertials = 0;
+        for c in e.children().filter(|n| n.is_element()) {
+            let ctag = c.tag_name().name();
+            if ignored.contains(&ctag) {
+                cut.push(c.range());
+            }
+            if ctag == "inertial" {
+                inertials += 1;
+                if let Some(bad) = malformed_inertial(c) {
+                    warnings.push(format!(
+                        "{file}: {at}: <inertial> on line {} is malformed ({bad}); ignored, since inertia does not enter statics",
+                        line(c)
+                    ));
+                }
+            }
+        }
+        if inertials > 1 {
+            warnings.push(format!(
+                "{file}: {at}: {inertials} <inertial> elements; ignored, since inertia does not enter statics"
+            ));
+        }
+        if tag == "joint" {
+            for c in e.children().filter(|n| n.is_element()) {
+                match c.tag_name().name() {
+                    "origin" => {
+                        numbers::<3>(file, &at, c, "xyz")?;
+                        numbers::<3>(file, &at, c, "rpy")?;
+                    }
+                    "axis" => {
+                        numbers::<3>(file, &at, c, "xyz")?;
+                    }
+                    "mimic" => {
+                        numbers::<1>(file, &at, c, "multiplier")?;
+                        numbers::<1>(file, &at, c, "offset")?;
+                    }
+                    "limit" => {
+                        let one = |a| numbers::<1>(file, &at, c, a).map(|v| v.map(|[x]| x));
+                        let limit = Limit {
+                            lower: one("lower")?,
+                            upper: one("upper")?,
+                            effort: one("effort")?,
+                        };
+                        one("velocity")?;
+                        if limit.effort.is_some_and(|e| e < 0.0) {
+                            return Err(robot_error(
+                                file,
+                                &at,
+                                format!(
+                                    "<limit effort=\"{}\"> is negative",
+                                    c.attribute("effort").unwrap_or("")
+                                ),
+                            ));
+                        }
+                        limits.insert(name.to_string(), limit);
+                        cut.push(c.range());
+                    }
+                    _ => {}
+                }
+            }
+            let kind = e.attribute("type").unwrap_or("");
+            if !JOINT_TYPES.contains(&kind) {
+                return Err(robot_error(
+                    file,
+                    at,
+                    format!(
+                        "unknown joint type `{kind}` (expected one of {})",
+                        JOINT_TYPES.join(", ")
+                    ),
+                ));
+            }
+            for part in ["parent", "child"] {
+                let link = e
+                    .children()
+                    .find(|c| c.has_tag_name(part))
+                    .and_then(|c| c.attribute("link"));
+                if link.is_none() {
+                    return Err(robot_error(
+                        file,
+                        at,
+                        format!("no <{part} link=\"…\"/> element"),
+                    ));
+                }
+            }
+        }
+    }
+    cut.sort_by_key(|r| r.start);
+    let mut kept = String::with_capacity(text.len());
+    let mut at = 0;
+    for r in cut {
+        if r.start >= at {
+            kept.push_str(&text[at..r.start]);
+            at = r.end;
+        }
+    }
+    kept.push_str(&text[at..]);
+    Ok(Scan {
+        text: kept,
+        link_lines,
+        joint_lines,
+        limits,
+        warnings,
+    })
+}
+
+/// Why an `<inertial>` element would not parse, if it would not.
+fn malformed_inertial(e: roxmltree::Node) -> Option<String> {
+    let number = |tag: &str, attr: &str| -> Option<String> {
+        let v = e
+            .children()
+            .find(|c| c.has_tag_name(tag))
+            .and_then(|c| c.attribute(attr));
+        match v.map(|s| s.trim().parse::<f64>()) {
+            Some(Ok(x)) if x.is_finite() => None,
+            Some(_) => Some(format!("<{tag} {attr}=\"{}\">", v.unwrap_or(""))),
+            None => Some(format!("no <{tag} {attr}>")),
+        }
+    };
+    number("mass", "value").or_else(|| {
+        ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"]
+            .iter()
+            .find_map(|a| number("inertia", a))
+    })
+}
+
+impl Robot {
+    /// Reads and checks a URDF file (at most [`crate::file::MAX_FILE_BYTES`]).
+    pub fn load(path: &Path) -> Result<Self, ProblemError> {
+        let text = crate::file::read_limited(path)?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// Parses and checks URDF text; `source` names it in messages.
+    pub fn parse(text: &str, source: &str) -> Result<Self, ProblemError> {
+        let file = source;
+        let scan = scan(text, file)?;
+        let parsed = urdf_rs::read_from_string(&scan.text)
+            .map_err(|e| robot_error(file, "<robot>", format!("could not be read: {e}")))?;
+        let link_line = |name: &str| scan.link_lines.get(name).copied().unwrap_or(0);
+        let joint_at = |name: &str| {
+            format!(
+                "<joint name=\"{name}\"> (line {})",
+                scan.joint_lines.get(name).copied().unwrap_or(0)
+            )
+        };
+        let links: Vec<String> = parsed.links.iter().map(|l| l.name.clone()).collect();
+        let link_index: HashMap<&str, usize> = links
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.as_str(), i))
+            .collect();
+        if links.is_empty() {
+            return Err(robot_error(file, "<robot>", "has no <link>"));
+        }
+        let mut warnings = scan.warnings;
+        let mut joints = Vec::with_capacity(parsed.joints.len());
+        let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
+        for (ji, j) in parsed.joints.iter().enumerate() {
+            let at = joint_at(&j.name);
+            let find = |role: &str, name: &str| {
+                link_index.get(name).copied().ok_or_else(|| {
+                    robot_error(
+                        file,
+                        &at,
+                        format!(
+                            "its {role} link `{name}` is not a <link> of this robot ({})",
+                            nearest(name, links.iter().map(String::as_str))
+                        ),
+                    )
+                })
+            };
+            let parent = find("parent", &j.parent.link)?;
+            let child = find("child", &j.child.link)?;
+            if parent == child {
+                return Err(robot_error(
+                    file,
+                    &at,
+                    "its parent and child are the same link",
+                ));
+            }
+            if let Some(other) = parent_joint[child] {
+                return Err(robot_error(
+                    file,
+                    &at,
+                    format!(
+                        "link `{}` is already the child of joint `{}`: a link has one parent",
+                        links[child], parsed.joints[other].name
+                    ),
+                ));
+            }
+            parent_joint[child] = Some(ji);
+            use urdf_rs::JointType as T;
+            let kind = match j.joint_type {
+                T::Revolute => JointKind::Revolute,
+                T::Continuous => JointKind::Continuous,
+                T::Prismatic => JointKind::Prismatic,
+                T::Fixed => JointKind::Fixed,
+                T::Floating | T::Planar | T::Spherical => {
+                    return Err(robot_error(
+                        file,
+                        &at,
+                        format!(
+                            "joint type `{}` is not supported: a hand's joints are revolute, continuous, prismatic or fixed",
+                            format!("{:?}", j.joint_type).to_lowercase()
+                        ),
+                    ))
+                }
+            };
+            // The scan checked every number of <origin> and <axis>.
+            let xyz = Vector3::from(j.origin.xyz.0);
+            let rpy = Vector3::from(j.origin.rpy.0);
+            let origin = Isometry3::from_parts(
+                Translation3::from(xyz),
+                UnitQuaternion::from_euler_angles(rpy.x, rpy.y, rpy.z),
+            );
+            let axis_raw = Vector3::from(j.axis.xyz.0);
+            let axis = if kind == JointKind::Fixed {
+                Vector3::x_axis()
+            } else {
+                Unit::try_new(axis_raw, 0.0).ok_or_else(|| {
+                    robot_error(
+                        file,
+                        &at,
+                        format!(
+                            "<axis xyz> is zero; a {} joint needs a direction",
+                            kind.name()
+                        ),
+                    )
+                })?
+            };
+            let lim = scan.limits.get(&j.name).copied().unwrap_or_default();
+            // An effort of 0 (urdf-rs's default, and a common placeholder) or +inf is
+            // no limit.
+            let effort = lim.effort.filter(|&e| e > 0.0 && e.is_finite());
+            let range = match (lim.lower, lim.upper) {
+                (Some(lo), Some(hi)) if kind != JointKind::Continuous && lo < hi => {
+                    (Some(lo), Some(hi))
+                }
+                _ => (None, None),
+            };
+            let mimic = match &j.mimic {
+                None => None,
+                Some(m) => {
+                    let multiplier = m.multiplier.unwrap_or(1.0);
+                    let offset = m.offset.unwrap_or(0.0);
+                    if !multiplier.is_finite() || !offset.is_finite() {
+                        return Err(robot_error(
+                            file,
+                            &at,
+                            format!("<mimic> needs finite multiplier and offset, got {multiplier} and {offset}"),
+                        ));
+                    }
+                    let leader = parsed
+                        .joints
+                        .iter()
+                        .position(|k| k.name == m.joint)
+                        .ok_or_else(|| {
+                            robot_error(
+                                file,
+                                &at,
+                                format!(
+                                    "<mimic joint=\"{}\">: no joint of that name ({})",
+                                    m.joint,
+                                    nearest(
+                                        &m.joint,
+                                        parsed.joints.iter().map(|k| k.name.as_str())
+                                    )
+                                ),
+                            )
+                        })?;
+                    Some(Mimic {
+                        leader,
+                        multiplier,
+                        offset,
+                    })
+                }
+            };
+            joints.push(Joint {
+                name: j.name.clone(),
+                kind,
+                origin,
+                axis,
+                parent,
+                child,
+                effort,
+                lower: range.0,
+                upper: range.1,
+                mimic,
+                line: scan.joint_lines.get(&j.name).copied().unwrap_or(0),
+            });
+        }
+        // One root, and every link reached from it (no cycle).
+        let roots: Vec<usize> = (0..links.len())
+            .filter(|&l| parent_joint[l].is_none())
+            .collect();
+        let root = match roots.as_slice() {
+            [r] => *r,
+            [] => {
+                return Err(robot_error(
+                    file,
+                    "<robot>",
+                    "every link is some joint's child, so the joints form a cycle and there is no root link",
+                ))
+            }
+            many => {
+                let names: Vec<String> = many
+                    .iter()
+                    .take(5)
+                    .map(|&l| format!("`{}` (line {})", links[l], link_line(&links[l])))
+                    .collect();
+                return Err(robot_error(
+                    file,
+                    "<robot>",
+                    format!(
+                        "{} root links (links that are no joint's child): {}{}; a hand is one tree",
+                        many.len(),
+                        names.join(", "),
+                        if many.len() > 5 { ", …" } else { "" }
+                    ),
+                ));
+            }
+        };
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); links.len()];
+        for (ji, j) in joints.iter().enumerate() {
+            children[j.parent].push(ji);
+        }
+        let mut order = Vec::with_capacity(links.len());
+        let mut stack = vec![root];
+        while let Some(l) = stack.pop() {
+            order.push(l);
+            stack.extend(children[l].iter().rev().map(|&ji| joints[ji].child));
+        }
+        if order.len() < links.len() {
+            let mut reached = vec![false; links.len()];
+            for &l in &order {
+                reached[l] = true;
+            }
+            let lost = (0..links.len()).find(|&l| !reached[l]).unwrap_or(0);
+            return Err(robot_error(
+                file,
+                format!(
+                    "<link name=\"{}\"> (line {})",
+                    links[lost],
+                    link_line(&links[lost])
+                ),
+                "is on a cycle of joints: it cannot be reached from the root link",
+            ));
+        }
+        // Mimic chains resolved to independent joints.
+        let independent: Vec<usize> = (0..joints.len())
+            .filter(|&j| joints[j].kind != JointKind::Fixed && joints[j].mimic.is_none())
+            .collect();
+        let mut coupling: Vec<Option<Coupling>> = vec![None; joints.len()];
+        for (k, &j) in independent.iter().enumerate() {
+            coupling[j] = Some(Coupling {
+                independent: k,
+                multiplier: 1.0,
+                offset: 0.0,
+            });
+        }
+        for j in 0..joints.len() {
+            if joints[j].kind == JointKind::Fixed {
+                if joints[j].mimic.is_some() {
+                    warnings.push(format!(
+                        "{file}: {}: a fixed joint with <mimic>; the mimic is ignored",
+                        joint_at(&joints[j].name)
+                    ));
+                }
+                continue;
+            }
+            let (mut at, mut mult, mut off, mut steps) = (j, 1.0, 0.0, 0);
+            while let Some(m) = joints[at].mimic {
+                if joints[m.leader].kind == JointKind::Fixed {
+                    return Err(robot_error(
+                        file,
+                        joint_at(&joints[at].name),
+                        format!(
+                            "<mimic joint=\"{}\">: that joint is fixed",
+                            joints[m.leader].name
+                        ),
+                    ));
+                }
+                // q_at = m q_leader + o, so q_j = mult q_at + off = mult m q_leader + (mult o + off).
+                off += mult * m.offset;
+                mult *= m.multiplier;
+                at = m.leader;
+                steps += 1;
+                if steps > joints.len() {
+                    return Err(robot_error(
+                        file,
+                        joint_at(&joints[j].name),
+                        "its <mimic> chain comes back to itself (a cycle of mimic joints)",
+                    ));
+                }
+            }
+            let base = coupling[at].expect("an independent joint has a coupling");
+            coupling[j] = Some(Coupling {
+                independent: base.independent,
+                multiplier: mult,
+                offset: off,
+            });
+        }
+        let link_lines = links.iter().map(|n| link_line(n)).collect();
+        Ok(Self {
+            name: parsed.name,
+            source: file.to_string(),
+            links,
+            joints,
+            root,
+            independent,
+            coupling,
+            warnings,
+            parent_joint,
+            order,
+            link_lines,
+        })
+    }
+
+    /// The index of the link called `name`.
+    pub fn link(&self, name: &str) -> Option<usize> {
+        self.links.iter().position(|l| l == name)
+    }
+
+    /// The index of the joint called `name`.
+    pub fn joint(&self, name: &str) -> Option<usize> {
+        self.joints.iter().position(|j| j.name == name)
+    }
+
+    /// Line of a link's element in the file.
+    pub fn link_line(&self, link: usize) -> u32 {
+        self.link_lines[link]
+    }
+
+    /// The joints from the root to `link`, root first (fixed ones included).
+    pub fn chain(&self, link: usize) -> Vec<usize> {
+        let mut chain = Vec::new();
+        let mut at = link;
+        while let Some(j) = self.parent_joint[at] {
+            chain.push(j);
+            at = self.joints[j].parent;
+        }
+        chain.reverse();
+        chain
+    }
+
+    /// The links no joint has as parent: the ends of the chains.
+    pub fn leaves(&self) -> Vec<usize> {
+        let mut has_child = vec![false; self.links.len()];
+        for j in &self.joints {
+            has_child[j.parent] = true;
+        }
+        self.order
+            .iter()
+            .copied()
+            .filter(|&l| !has_child[l])
+            .collect()
+    }
+
+    /// The position of every joint (radians or metres) from the independent
+    /// coordinates; fixed joints get 0.
+    pub fn full_positions(&self, q_ind: &[f64]) -> Vec<f64> {
+        self.coupling
+            .iter()
+            .map(|c| c.map_or(0.0, |c| c.multiplier * q_ind[c.independent] + c.offset))
+            .collect()
+    }
+
+    /// Frames of every link and joint at the independent coordinates `q_ind` (one per
+    /// [`Robot::independent`]), in the root link's frame.
+    pub fn pose(&self, q_ind: &[f64]) -> Pose {
+        let q = self.full_positions(q_ind);
+        let mut links = vec![Isometry3::identity(); self.links.len()];
+        let mut joints = vec![Isometry3::identity(); self.joints.len()];
+        for &l in &self.order {
+            let Some(ji) = self.parent_joint[l] else {
+                continue;
+            };
+            let j = &self.joints[ji];
+            let frame = links[j.parent] * j.origin;
+            let motion = match j.kind {
+                JointKind::Fixed => Isometry3::identity(),
+                JointKind::Revolute | JointKind::Continuous => Isometry3::from_parts(
+                    Translation3::identity(),
+                    UnitQuaternion::from_axis_angle(&j.axis, q[ji]),
+                ),
+                JointKind::Prismatic => Isometry3::from_parts(
+                    Translation3::from(j.axis.into_inner() * q[ji]),
+                    UnitQuaternion::identity(),
+                ),
+            };
+            joints[ji] = frame;
+            links[l] = frame * motion;
+        }
+        Pose { links, joints }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rpy_is_fixed_axis_roll_pitch_yaw() {
+        let (r, p, y) = (0.3, -0.7, 1.1);
+        let q = UnitQuaternion::from_euler_angles(r, p, y);
+        let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), r);
+        let ry = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), p);
+        let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), y);
+        assert!(
+            (q.to_rotation_matrix().matrix() - (rz * ry * rx).to_rotation_matrix().matrix()).norm()
+                < 1e-15
+        );
+    }
+
+    #[test]
+    fn nearest_names() {
+        assert_eq!(edit_distance("joint_0.0", "joint_0.0"), 0);
+        assert_eq!(edit_distance("joint_00", "joint_0.0"), 1);
+        let s = nearest("jiont_1.0", ["joint_1.0", "joint_10.0", "link_1.0", "zzz"]);
+        assert!(s.starts_with("nearest: `joint_1.0`"), "{s}");
+    }
+}

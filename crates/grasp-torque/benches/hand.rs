@@ -1,0 +1,51 @@
+//! The hand form: parsing a URDF, and building G and Jᵀ from the parsed robot for a new
+//! grasp (forward kinematics, contact frames, mimic coupling, validation), which a
+//! planner that poses millions of grasps of one hand pays per grasp. The grasp model
+//! and the solve that follow are timed beside it for scale.
+//!
+//! Run: `cargo bench -p grasp-torque --bench hand`. Figures are in docs/benchmarks.md.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use grasp_torque::{GraspSolver, HandFile, Robot, SolverConfig, WarmStart};
+use std::hint::black_box;
+use std::path::Path;
+
+const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
+
+fn hand(c: &mut Criterion) {
+    for (name, file) in [
+        ("allegro-pinch", "hands/allegro-pinch.json"),
+        ("ability-tripod", "hands/ability-tripod.json"),
+    ] {
+        let path = Path::new(ROOT).join(file);
+        let spec: HandFile =
+            serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let urdf = path.parent().unwrap().join(&spec.hand.model);
+        let text = std::fs::read_to_string(&urdf).unwrap();
+        let mut g = c.benchmark_group(name);
+        g.bench_function("parse URDF", |b| {
+            b.iter(|| Robot::parse(black_box(&text), "hand.urdf").unwrap())
+        });
+        let robot = Robot::parse(&text, "hand.urdf").unwrap();
+        g.bench_function("build G and Jᵀ", |b| {
+            b.iter(|| spec.build(black_box(&robot)).unwrap())
+        });
+        let problem = spec.build(&robot).unwrap().problem;
+        let config = SolverConfig::default();
+        g.bench_function("grasp model and solver", |b| {
+            b.iter(|| GraspSolver::new(black_box(&problem), &config).unwrap())
+        });
+        let mut solver = GraspSolver::new(&problem, &config).unwrap();
+        g.bench_function("solve", |b| {
+            b.iter(|| {
+                solver
+                    .solve(black_box(&problem.wrench), &WarmStart::default())
+                    .unwrap();
+            })
+        });
+        g.finish();
+    }
+}
+
+criterion_group!(benches, hand);
+criterion_main!(benches);

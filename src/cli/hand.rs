@@ -1,0 +1,152 @@
+//! `grasp-torque hand`: what a URDF offers a hand-form problem file.
+
+use super::format::g;
+use super::Format;
+use anyhow::{Context, Result};
+use grasp_torque::urdf::{JointKind, Robot};
+use serde_json::json;
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug)]
+pub(crate) struct HandArgs {
+    /// The robot description (URDF).
+    urdf: PathBuf,
+    /// Output format.
+    #[arg(long, value_enum, default_value = "text")]
+    format: Format,
+}
+
+fn limit(v: Option<f64>) -> serde_json::Value {
+    v.map_or(serde_json::Value::Null, |x| json!(x))
+}
+
+pub(crate) fn run(args: &HandArgs) -> Result<u8> {
+    let robot = Robot::load(&args.urdf).with_context(|| format!("{}", args.urdf.display()))?;
+    for w in &robot.warnings {
+        eprintln!("warning: {w}");
+    }
+    let joint = |j: usize| &robot.joints[j];
+    let moving: Vec<usize> = (0..robot.joints.len())
+        .filter(|&j| joint(j).kind != JointKind::Fixed)
+        .collect();
+    let chains: Vec<(usize, Vec<usize>)> = robot
+        .leaves()
+        .into_iter()
+        .map(|l| {
+            let c = robot
+                .chain(l)
+                .into_iter()
+                .filter(|&j| joint(j).kind != JointKind::Fixed)
+                .collect();
+            (l, c)
+        })
+        .collect();
+    let leader = |j: usize| {
+        let c = robot.coupling[j].expect("a moving joint has a coupling");
+        (joint(robot.independent[c.independent]).name.clone(), c)
+    };
+    match args.format {
+        Format::Json => {
+            let v = json!({
+                "robot": robot.name,
+                "file": args.urdf.display().to_string(),
+                "root": robot.links[robot.root],
+                "links": robot.links,
+                "independent_joints": robot.independent.iter().map(|&j| json!({
+                    "name": joint(j).name,
+                    "type": joint(j).kind.name(),
+                    "lower": limit(joint(j).lower),
+                    "upper": limit(joint(j).upper),
+                    "effort": limit(joint(j).effort),
+                    "child": robot.links[joint(j).child],
+                })).collect::<Vec<_>>(),
+                "mimic_joints": moving.iter().filter(|&&j| joint(j).mimic.is_some()).map(|&j| {
+                    let (name, c) = leader(j);
+                    json!({"name": joint(j).name, "type": joint(j).kind.name(), "follows": name,
+                           "multiplier": c.multiplier, "offset": c.offset})
+                }).collect::<Vec<_>>(),
+                "chains": chains.iter().map(|(l, c)| json!({
+                    "link": robot.links[*l],
+                    "independent_joints": dedup(c.iter().map(|&j| leader(j).0)),
+                })).collect::<Vec<_>>(),
+                "warnings": robot.warnings,
+            });
+            outln!("{}", serde_json::to_string_pretty(&v)?);
+        }
+        Format::Text => {
+            outln!(
+                "robot `{}` ({}): {} links, root `{}`",
+                robot.name,
+                args.urdf.display(),
+                robot.links.len(),
+                robot.links[robot.root]
+            );
+            outln!(
+                "\nindependent joints ({}; positions in radians, or metres for prismatic; effort in N·m or N)",
+                robot.independent.len()
+            );
+            let width = robot
+                .independent
+                .iter()
+                .map(|&j| joint(j).name.chars().count())
+                .max()
+                .unwrap_or(0);
+            let show = |v: Option<f64>| v.map_or("—".to_string(), |x| g(x, 5));
+            for &j in &robot.independent {
+                let jt = joint(j);
+                outln!(
+                    "  {:<width$}  {:<10}  [{}, {}]  effort {}",
+                    jt.name,
+                    jt.kind.name(),
+                    show(jt.lower),
+                    show(jt.upper),
+                    show(jt.effort)
+                );
+            }
+            let mimics: Vec<usize> = moving
+                .iter()
+                .copied()
+                .filter(|&j| joint(j).mimic.is_some())
+                .collect();
+            if !mimics.is_empty() {
+                outln!("\nmimic joints (q = multiplier · q_leader + offset, chains resolved)");
+                for j in mimics {
+                    let (name, c) = leader(j);
+                    let sign = if c.offset < 0.0 { '−' } else { '+' };
+                    outln!(
+                        "  {} = {} · {name} {sign} {}",
+                        joint(j).name,
+                        g(c.multiplier, 8),
+                        g(c.offset.abs(), 8)
+                    );
+                }
+            }
+            outln!("\nchains (end link: the independent joints that move it, root first)");
+            for (l, c) in &chains {
+                let names = dedup(c.iter().map(|&j| leader(j).0));
+                outln!(
+                    "  {}: {}",
+                    robot.links[*l],
+                    if names.is_empty() {
+                        "(fixed to the root)".into()
+                    } else {
+                        names.join(", ")
+                    }
+                );
+            }
+        }
+    }
+    Ok(0)
+}
+
+/// Names in order, each once (a mimic joint credits its leader, which may already be
+/// on the chain).
+fn dedup(names: impl Iterator<Item = String>) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for n in names {
+        if !out.contains(&n) {
+            out.push(n);
+        }
+    }
+    out
+}

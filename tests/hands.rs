@@ -1,0 +1,201 @@
+//! Hand-form problems from the command line: solve, build then solve, the `hand`
+//! listing, and named errors (exit 2) for malformed URDFs and hand files.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn fixture(name: &str) -> String {
+    format!("{}/fixtures/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+const HANDS: [&str; 2] = ["hands/allegro-pinch.json", "hands/ability-tripod.json"];
+
+fn json(out: &Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn temp_dir() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("grasp-torque-hands-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn hand_files_solve_and_build_then_solve_agrees() {
+    // Exact cones need an exact-cone backend (Clarabel) compiled in.
+    let cones_kinds: &[&str] = if cfg!(feature = "clarabel") {
+        &["linear", "exact"]
+    } else {
+        &["linear"]
+    };
+    for hand in HANDS {
+        for &cones in cones_kinds {
+            let direct = json(&run(&[
+                "solve",
+                &fixture(hand),
+                "--cones",
+                cones,
+                "--format",
+                "json",
+            ]));
+            assert_eq!(direct["status"], "optimal", "{hand} {cones}");
+            assert_eq!(direct["hand"]["torque_limits"], "model");
+            let names = direct["joint_names"].as_array().unwrap();
+            assert!(names
+                .iter()
+                .all(|n| !n.as_str().unwrap().starts_with("joint ")));
+
+            let built = run(&["build", &fixture(hand)]);
+            assert!(built.status.success());
+            let matrix: serde_json::Value = serde_json::from_slice(&built.stdout).unwrap();
+            assert_eq!(&matrix["joint_names"], &direct["joint_names"]);
+            let path = temp_dir().join(Path::new(hand).file_name().unwrap());
+            std::fs::write(&path, &built.stdout).unwrap();
+            let via = json(&run(&[
+                "solve",
+                path.to_str().unwrap(),
+                "--cones",
+                cones,
+                "--format",
+                "json",
+            ]));
+            // The matrix form round-trips every number, so the answer is the same.
+            assert_eq!(via["objective"], direct["objective"], "{hand} {cones}");
+            assert_eq!(via["torque"], direct["torque"], "{hand} {cones}");
+            assert_eq!(via["joint_names"], direct["joint_names"]);
+        }
+    }
+}
+
+#[test]
+fn text_report_names_joints_and_the_hand() {
+    let out = run(&["solve", &fixture("hands/allegro-pinch.json")]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("joint_14.0") && text.contains("|τ| ≤ 10"),
+        "{text}"
+    );
+    assert!(text.contains("robot `allegro_right`"), "{text}");
+    assert!(
+        !text.contains("joint_8.0"),
+        "ring finger joints move no contact: {text}"
+    );
+}
+
+#[test]
+fn hand_command_lists_joints_mimics_and_chains() {
+    let out = run(&[
+        "hand",
+        &fixture("urdf/ability_hand/ability_hand_right.urdf"),
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("index_q2 = 1.0585133 · index_q1 + 0.72349796"),
+        "{text}"
+    );
+    assert!(text.contains("thumb_tip: thumb_q1, thumb_q2"), "{text}");
+    let v = json(&run(&[
+        "hand",
+        &fixture("urdf/test/linkage_gripper.urdf"),
+        "--format",
+        "json",
+    ]));
+    let mimic = v["mimic_joints"].as_array().unwrap();
+    let roll = mimic.iter().find(|m| m["name"] == "right_roll").unwrap();
+    assert_eq!(roll["follows"], "right_prox");
+    assert!((roll["multiplier"].as_f64().unwrap() + 0.45).abs() < 1e-15);
+    assert_eq!(v["independent_joints"].as_array().unwrap().len(), 5);
+    let compare = run(&["compare", &fixture("hands/ability-tripod.json")]);
+    assert_eq!(
+        compare.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&compare.stdout)
+    );
+}
+
+fn assert_rejected(out: &Output, needles: &[&str]) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
+    for n in needles {
+        assert!(err.contains(n), "expected `{n}` in: {err}");
+    }
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn malformed_robots_and_hand_files_exit_2_with_a_named_error() {
+    let dir = temp_dir();
+    let urdf = dir.join("broken.urdf");
+    std::fs::write(
+        &urdf,
+        "<robot name=\"r\">\n<link name=\"palm\"/>\n<link name=\"tip\"/>\n\
+         <joint name=\"j\" type=\"revolute\"><parent link=\"plam\"/><child link=\"tip\"/>\
+         <axis xyz=\"0 0 1\"/></joint>\n</robot>\n",
+    )
+    .unwrap();
+    assert_rejected(
+        &run(&["hand", urdf.to_str().unwrap()]),
+        &[
+            "broken.urdf",
+            "<joint name=\"j\"> (line 4)",
+            "`plam`",
+            "nearest: `palm`",
+        ],
+    );
+    let hand = |body: serde_json::Value| {
+        let p = dir.join("hand.json");
+        std::fs::write(&p, body.to_string()).unwrap();
+        run(&["solve", p.to_str().unwrap()])
+    };
+    assert_rejected(
+        &hand(serde_json::json!({
+            "hand": {"model": "broken.urdf"},
+            "contacts": [{"link": "tip", "position": [0, 0, 0], "normal": [0, 0, 1], "model": "fpc"}],
+            "wrench": [0, 0, 1, 0, 0, 0]
+        })),
+        &["broken.urdf", "parent link `plam`"],
+    );
+    let allegro = fixture("urdf/allegro/allegro_hand_right.urdf");
+    assert_rejected(
+        &hand(serde_json::json!({
+            "hand": {"model": allegro, "joint_positions": {"joint_2": 0.1}},
+            "contacts": [{"link": "link_3.0_tip", "position": [0, 0, 0], "normal": [0, 0, 1], "model": "fpc"}],
+            "wrench": [0, 0, 1, 0, 0, 0]
+        })),
+        &["hand.joint_positions.joint_2", "nearest: `joint_2.0`"],
+    );
+    assert_rejected(
+        &hand(serde_json::json!({
+            "hand": {"model": allegro},
+            "contacts": [{"link": "link_3.0_tip", "position": [0, 0, 0], "normal": [0, 0, 1], "model": "fpc"}],
+            "wrench": [0, 0, 1, 0, 0, 0],
+            "torque_limits": [1, 2]
+        })),
+        &["torque_limits"],
+    );
+    assert_rejected(
+        &hand(serde_json::json!({
+            "hand": {"model": allegro, "joint_positions": {"joint_1.0": 0.1}},
+            "contacts": [{"link": "link_3.0_tip", "position": [0, 0, 0], "normal": [0, 0, 1], "model": "fpc"}],
+            "fingers": [],
+            "wrench": [0, 0, 1, 0, 0, 0]
+        })),
+        &["fields of more than one form"],
+    );
+}
