@@ -135,20 +135,7 @@ impl GraspProblem {
                 format!("{n} columns"),
             ));
         }
-        if self.contacts.is_empty() {
-            return Err(ProblemError::invalid(
-                "contacts",
-                "at least one contact",
-                "an empty list",
-            ));
-        }
-        if self.contacts.len() > MAX_CONTACTS {
-            return Err(ProblemError::invalid(
-                "contacts",
-                format!("at most {MAX_CONTACTS} contacts"),
-                format!("{} contacts", self.contacts.len()),
-            ));
-        }
+        contact_count(self.contacts.len())?;
         let jt = &self.jacobian_transpose;
         let m = jt.nrows();
         if m == 0 {
@@ -299,6 +286,26 @@ impl GraspProblem {
         }
         Ok(())
     }
+}
+
+/// At least one contact and at most [`MAX_CONTACTS`]: checked by every problem form
+/// before anything proportional to the count is allocated.
+pub fn contact_count(count: usize) -> Result<(), ProblemError> {
+    if count == 0 {
+        return Err(ProblemError::invalid(
+            "contacts",
+            "at least one contact",
+            "an empty list",
+        ));
+    }
+    if count > MAX_CONTACTS {
+        return Err(ProblemError::invalid(
+            "contacts",
+            format!("at most {MAX_CONTACTS} contacts"),
+            format!("{count} contacts"),
+        ));
+    }
+    Ok(())
 }
 
 /// A number within the input domain's magnitude, or an error naming `field`.

@@ -21,7 +21,7 @@ use crate::file::{ModelName, Options};
 use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
 use grasp_core::matrix::Matrix;
-use grasp_core::problem::{GraspProblem, MAX_CONTACTS, MAX_JOINTS, MAX_MAGNITUDE};
+use grasp_core::problem::{contact_count, GraspProblem, MAX_JOINTS, MAX_MAGNITUDE};
 use serde::{Deserialize, Serialize};
 
 /// How far from unit length an axis or normal may be.
@@ -220,13 +220,7 @@ impl GeometryFile {
                 format!("{m} joints"),
             ));
         }
-        if self.contacts.len() > MAX_CONTACTS {
-            return Err(ProblemError::invalid(
-                "contacts",
-                format!("at most {MAX_CONTACTS} contacts"),
-                format!("{} contacts", self.contacts.len()),
-            ));
-        }
+        contact_count(self.contacts.len())?;
         for (k, f) in self.fingers.iter().enumerate() {
             for (j, joint) in f.joints.iter().enumerate() {
                 let at = format!("{}.joints[{j}]", label("fingers", k, &f.name));
@@ -237,13 +231,6 @@ impl GeometryFile {
                 check_vec(|| format!("{at}.origin"), joint.origin, false)?;
                 check_vec(|| format!("{at}.axis"), joint.axis, true)?;
             }
-        }
-        if self.contacts.is_empty() {
-            return Err(ProblemError::invalid(
-                "contacts",
-                "at least one contact",
-                "an empty list",
-            ));
         }
         let mut models = Vec::with_capacity(self.contacts.len());
         let mut g_cols: Vec<[f64; 6]> = Vec::new();

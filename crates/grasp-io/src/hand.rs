@@ -14,7 +14,7 @@ use crate::urdf::{nearest, JointKind, Robot};
 use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
 use grasp_core::matrix::Matrix;
-use grasp_core::problem::{GraspProblem, MAX_CONTACTS, MAX_JOINTS, MAX_MAGNITUDE};
+use grasp_core::problem::{contact_count, GraspProblem, MAX_JOINTS, MAX_MAGNITUDE};
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -189,20 +189,7 @@ impl HandFile {
     /// grasps of one hand calls.
     pub fn build(&self, robot: &Robot) -> Result<HandProblem, ProblemError> {
         let mut warnings = robot.warnings.clone();
-        if self.contacts.is_empty() {
-            return Err(ProblemError::invalid(
-                "contacts",
-                "at least one contact",
-                "an empty list",
-            ));
-        }
-        if self.contacts.len() > MAX_CONTACTS {
-            return Err(ProblemError::invalid(
-                "contacts",
-                format!("at most {MAX_CONTACTS} contacts"),
-                format!("{} contacts", self.contacts.len()),
-            ));
-        }
+        contact_count(self.contacts.len())?;
         // Independent coordinates.
         let mut q_ind = vec![0.0; robot.independent.len()];
         let mut given = vec![false; robot.independent.len()];

@@ -476,6 +476,7 @@ impl Robot {
         let mut warnings = scan.warnings;
         let mut joints = Vec::with_capacity(parsed.joints.len());
         let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
+        let mut base_mounts: Vec<(usize, String)> = Vec::new();
         for (ji, j) in parsed.joints.iter().enumerate() {
             let at = joint_at(&j.name);
             let find = |role: &str, name: &str| {
@@ -516,12 +517,18 @@ impl Robot {
                 T::Continuous => JointKind::Continuous,
                 T::Prismatic => JointKind::Prismatic,
                 T::Fixed => JointKind::Fixed,
+                // A floating or planar joint from the root mounts the hand: the mount
+                // holds the base, so it is fixed at its origin (checked below).
+                T::Floating | T::Planar if j.mimic.is_none() => {
+                    base_mounts.push((ji, format!("{:?}", j.joint_type).to_lowercase()));
+                    JointKind::Fixed
+                }
                 T::Floating | T::Planar | T::Spherical => {
                     return Err(robot_error(
                         file,
                         &at,
                         format!(
-                            "joint type `{}` is not supported: a hand's joints are revolute, continuous, prismatic or fixed",
+                            "joint type `{}` is not supported: a hand's joints are revolute, continuous, prismatic or fixed (a floating or planar joint is accepted only as the mount of the whole hand, from the root link)",
                             format!("{:?}", j.joint_type).to_lowercase()
                         ),
                     ))
@@ -641,6 +648,24 @@ impl Robot {
                 ));
             }
         };
+        for (ji, kind) in base_mounts {
+            let j = &joints[ji];
+            if j.parent != root {
+                return Err(robot_error(
+                    file,
+                    joint_at(&j.name),
+                    format!(
+                        "joint type `{kind}` is not supported inside the hand: a floating or planar joint is accepted only as the mount of the whole hand, from the root link `{}`",
+                        links[root]
+                    ),
+                ));
+            }
+            warnings.push(format!(
+                "{file}: {}: a {kind} joint from the root link mounts the hand; it is held fixed at its <origin>, so the object pose is relative to `{}`",
+                joint_at(&j.name),
+                links[root]
+            ));
+        }
         let mut children: Vec<Vec<usize>> = vec![Vec::new(); links.len()];
         for (ji, j) in joints.iter().enumerate() {
             children[j.parent].push(ji);

@@ -311,8 +311,8 @@ fn malformed_descriptions_are_named_errors() {
             "unknown joint type `hinge`",
         ),
         (
-            urdf(&j1.replace("revolute", "floating"), &["a", "b"]),
-            "`floating` is not supported",
+            urdf(&j1.replace("revolute", "spherical"), &["a", "b"]),
+            "`spherical` is not supported",
         ),
         (
             urdf(&j1.replace("0 0 1", "0 0 0"), &["a", "b"]),
@@ -410,6 +410,47 @@ fn limits_without_effort_or_velocity_load_unlimited() {
     )
     .unwrap();
     assert_eq!(robot.joints[0].effort, None, "an effort of 0 is no limit");
+}
+
+#[test]
+fn a_floating_mount_at_the_root_is_held_fixed() {
+    let fixed = |kind: &str, parent: &str| {
+        format!(
+            "<joint name=\"mount\" type=\"{kind}\"><parent link=\"{parent}\"/><child link=\"palm\"/>\
+             <origin xyz=\"0 0 0.1\"/></joint>"
+        )
+    };
+    let finger = revolute("j1", "palm", "tip", "");
+    let robot = Robot::parse(
+        &urdf(
+            &format!("{}{finger}", fixed("floating", "world")),
+            &["world", "palm", "tip"],
+        ),
+        "m.urdf",
+    )
+    .unwrap();
+    assert_eq!(robot.independent.len(), 1);
+    assert!(
+        robot.warnings.iter().any(|w| w.contains("mounts the hand")),
+        "{:?}",
+        robot.warnings
+    );
+    let reference = Robot::parse(
+        &urdf(
+            &format!("{}{finger}", fixed("fixed", "world")),
+            &["world", "palm", "tip"],
+        ),
+        "m.urdf",
+    )
+    .unwrap();
+    assert_eq!(robot.pose(&[0.3]).links[2], reference.pose(&[0.3]).links[2]);
+    // Inside the hand it is refused.
+    let inner = format!(
+        "{}<joint name=\"slider\" type=\"planar\"><parent link=\"palm\"/><child link=\"tip\"/></joint>",
+        revolute("j0", "world", "palm", "")
+    );
+    let msg = robot_error(&urdf(&inner, &["world", "palm", "tip"]));
+    assert!(msg.contains("inside the hand"), "{msg}");
 }
 
 #[test]
