@@ -2,8 +2,11 @@
 //! mimic couplings, forward kinematics and joint frames.
 //!
 //! Parsing is [`urdf_rs`]'s, after a pass with `roxmltree` that records where each
-//! element is (for messages) and drops what statics never reads: `<inertial>`,
-//! `<visual>`, `<collision>`, `<calibration>`, `<dynamics>` and `<safety_controller>`.
+//! element is (for messages), checks every number of `<origin>`, `<axis>`, `<limit>`
+//! and `<mimic>`, reads `<limit>` itself (urdf-rs requires `effort` and `velocity`,
+//! statics neither), and drops what statics never reads: `<inertial>`, `<visual>`,
+//! `<collision>`, `<calibration>`, `<dynamics>`, `<safety_controller>` and every
+//! top-level element other than `<link>` and `<joint>`.
 //! Malformed or duplicated inertial data therefore loads, with a warning, and meshes are
 //! never opened. Everything the kinematics uses is checked: every error names the file,
 //! the element and the problem.
@@ -285,6 +288,8 @@ fn scan(text: &str, file: &str) -> Result<Scan, ProblemError> {
     for e in robot.children().filter(|n| n.is_element()) {
         let tag = e.tag_name().name();
         if tag != "link" && tag != "joint" {
+            // <material>, <transmission>, <gazebo>, …: nothing statics reads.
+            cut.push(e.range());
             continue;
         }
         let Some(name) = e.attribute("name") else {

@@ -460,6 +460,11 @@ fn inertia_never_blocks_loading() {
         "<link name=\"a\"><inertial><mass value=\"heavy\"/></inertial><inertial/>\
          <visual><geometry><mesh filename=\"missing.stl\"/></geometry></visual></link><link name=\"b\"/>",
     );
+    let text = text.replace(
+        "<robot name=\"r\">",
+        "<robot name=\"r\"><material name=\"m\"><color rgba=\"1 0\"/></material>\
+         <transmission name=\"t\"><type>x</type></transmission><gazebo><plugin/></gazebo>",
+    );
     let robot = Robot::parse(&text, "soft.urdf").unwrap();
     assert_eq!(robot.links.len(), 2);
     assert!(
