@@ -2,7 +2,7 @@
 
 use super::format::g;
 use super::Format;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use grasp_torque::urdf::{JointKind, Robot};
 use serde_json::json;
 use std::path::PathBuf;
@@ -21,7 +21,8 @@ fn limit(v: Option<f64>) -> serde_json::Value {
 }
 
 pub(crate) fn run(args: &HandArgs) -> Result<u8> {
-    let robot = Robot::load(&args.urdf).with_context(|| format!("{}", args.urdf.display()))?;
+    // The error names the file already.
+    let robot = Robot::load(&args.urdf)?;
     for w in &robot.warnings {
         eprintln!("warning: {w}");
     }
