@@ -17,6 +17,7 @@ macro_rules! out {
     }};
 }
 
+mod batch;
 mod build;
 mod compare;
 mod format;
@@ -47,6 +48,9 @@ struct Cli {
 enum Command {
     /// Solve one problem file and report torques, contact forces and checks.
     Solve(solve::SolveArgs),
+    /// Solve many problems, one per line of a JSON-lines file, in parallel: one result
+    /// per output line (JSON lines or CSV), in input order, with its line number.
+    Batch(batch::BatchArgs),
     /// Print a problem file (any form) in matrix form, ready for `solve`.
     Build(build::BuildArgs),
     /// List a URDF hand's links, independent joints (limits, efforts), mimic couplings
@@ -211,6 +215,7 @@ pub(crate) fn run() -> Result<u8> {
     let cli = Cli::parse();
     let code = match cli.command {
         Command::Solve(args) => solve::run(&args),
+        Command::Batch(args) => batch::run(&args),
         Command::Build(args) => build::run(&args),
         Command::Hand(args) => hand::run(&args),
         #[cfg(feature = "active-set")]

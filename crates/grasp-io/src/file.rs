@@ -3,6 +3,7 @@
 //! Errors name the field (`contacts[1].mu`) and what was expected, or the JSON line and
 //! column when the text is not well-formed.
 
+use crate::urdf::Robot;
 use grasp_core::cone::Linearization;
 use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
@@ -10,7 +11,9 @@ use grasp_core::matrix::Matrix;
 use grasp_core::model::InternalForces;
 use grasp_core::problem::GraspProblem;
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 /// The contact model names of problem files.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -354,6 +357,47 @@ pub fn parse_problem(text: &str) -> Result<GraspProblem, ProblemError> {
 /// Parses a problem file's text in any of the three forms; a hand-form file's relative
 /// `hand.model` is taken relative to `base` (the problem file's folder).
 pub fn parse_problem_at(text: &str, base: &Path) -> Result<Loaded, ProblemError> {
+    parse_with(text, base, &|path| {
+        crate::hand::load_robot(path).map(Arc::new)
+    })
+}
+
+/// Parses many problems that may share robot files (a batch, a planner's loop): each
+/// URDF that a hand-form problem names is read and parsed once, keyed by its path,
+/// then shared by every problem that names it. `Sync`: threads may share one parser.
+#[derive(Debug, Default)]
+pub struct ProblemParser {
+    robots: Mutex<HashMap<PathBuf, Arc<Robot>>>,
+}
+
+impl ProblemParser {
+    /// A parser with no robot read yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// As [`parse_problem_at`], with the robot files cached.
+    pub fn parse_at(&self, text: &str, base: &Path) -> Result<Loaded, ProblemError> {
+        parse_with(text, base, &|path| self.robot(path))
+    }
+
+    fn robot(&self, path: &Path) -> Result<Arc<Robot>, ProblemError> {
+        // Held while a new robot parses, so that threads asking for it parse it once.
+        let mut robots = self.robots.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(r) = robots.get(path) {
+            return Ok(r.clone());
+        }
+        let r = Arc::new(crate::hand::load_robot(path)?);
+        robots.insert(path.to_path_buf(), r.clone());
+        Ok(r)
+    }
+}
+
+fn parse_with(
+    text: &str,
+    base: &Path,
+    robot: &dyn Fn(&Path) -> Result<Arc<Robot>, ProblemError>,
+) -> Result<Loaded, ProblemError> {
     let value: serde_json::Value = from_json_str(text)?;
     let Some(obj) = value.as_object() else {
         return Err(ProblemError::invalid(
@@ -377,7 +421,8 @@ pub fn parse_problem_at(text: &str, base: &Path) -> Result<Loaded, ProblemError>
             .into_problem()
             .map(plain),
         (false, false, true) => {
-            let built = from_json_str::<crate::hand::HandFile>(text)?.into_problem(base)?;
+            let file = from_json_str::<crate::hand::HandFile>(text)?;
+            let built = file.build(&*robot(&file.model_path(base))?)?;
             Ok(Loaded {
                 problem: built.problem,
                 hand: Some(built.report),

@@ -18,7 +18,7 @@ use grasp_core::problem::{contact_count, GraspProblem, MAX_JOINTS, MAX_MAGNITUDE
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// `hand`: which robot, in which configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -162,6 +162,18 @@ pub struct HandProblem {
     pub report: HandReport,
 }
 
+/// Reads and parses a hand's URDF; an unreadable file is an error of `hand.model`.
+pub(crate) fn load_robot(path: &Path) -> Result<Robot, ProblemError> {
+    Robot::load(path).map_err(|e| match e {
+        ProblemError::Io { path, error } => ProblemError::invalid(
+            "hand.model",
+            "a readable URDF file (a relative path is relative to the problem file)",
+            format!("{path}: {error}"),
+        ),
+        other => other,
+    })
+}
+
 fn label(i: usize, name: &Option<String>) -> String {
     match name {
         Some(n) => format!("contacts[{i}] ({n})"),
@@ -173,16 +185,12 @@ impl HandFile {
     /// Loads the robot (a relative `hand.model` is taken relative to `base`, the
     /// problem file's folder) and builds the problem.
     pub fn into_problem(self, base: &Path) -> Result<HandProblem, ProblemError> {
-        let path = base.join(&self.hand.model);
-        let robot = Robot::load(&path).map_err(|e| match e {
-            ProblemError::Io { path, error } => ProblemError::invalid(
-                "hand.model",
-                "a readable URDF file (a relative path is relative to the problem file)",
-                format!("{path}: {error}"),
-            ),
-            other => other,
-        })?;
-        self.build(&robot)
+        self.build(&load_robot(&self.model_path(base))?)
+    }
+
+    /// The robot file: `hand.model`, relative to `base` unless absolute.
+    pub fn model_path(&self, base: &Path) -> PathBuf {
+        base.join(&self.hand.model)
     }
 
     /// Builds the problem on an already parsed robot: what a planner that poses many

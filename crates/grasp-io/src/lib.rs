@@ -11,7 +11,8 @@ pub mod hand;
 pub mod urdf;
 
 pub use file::{
-    load, load_problem, parse_problem, parse_problem_at, ContactSpec, Loaded, MatrixFile, ModelName,
+    load, load_problem, parse_problem, parse_problem_at, ContactSpec, Loaded, MatrixFile,
+    ModelName, ProblemParser,
 };
 pub use geometry::GeometryFile;
 pub use grasp_core::error::ProblemError;

@@ -75,7 +75,7 @@ fn native(c: &mut Criterion) {
 
 fn build(c: &mut Criterion) {
     let mut g = c.benchmark_group("build");
-    for name in ["paper-example", "hand5-pcwf", "hand5-mixed"] {
+    for name in FIXTURES {
         let p = problem(name);
         let config = SolverConfig::default();
         g.bench_function(BenchmarkId::new("new-grasp", name), |b| {

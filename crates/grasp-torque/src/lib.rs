@@ -3,7 +3,7 @@
 pub use grasp_core::*;
 pub use grasp_io::{
     file, geometry, hand, load, load_problem, parse_problem, parse_problem_at, urdf, HandFile,
-    Loaded, Robot,
+    Loaded, ProblemParser, Robot,
 };
 
 #[cfg(feature = "active-set")]
@@ -15,7 +15,11 @@ pub use grasp_osqp::{OsqpSettings, OsqpSolver};
 
 mod backend;
 pub use backend::{Backend, BackendError, Cones, SolverConfig};
+pub mod batch;
 pub mod sweep;
+pub use batch::{
+    for_each_solution, solve_batch, BatchError, BatchGrasp, BatchOptions, BatchResult, BatchSource,
+};
 
 use std::sync::Arc;
 

@@ -65,3 +65,52 @@ fn native_solves_reuse_the_workspace() {
         assert_eq!(allocations() - before, 0, "{name} allocated");
     }
 }
+
+#[test]
+fn batch_wrenches_after_the_first_reuse_the_workers_buffers() {
+    use grasp_torque::{for_each_solution, BatchGrasp, BatchOptions};
+    use std::sync::Mutex;
+    let grasps: Vec<BatchGrasp> = ["hand3-pcwf", "hand4-sfcl", "hand5-mixed", "hand4-sfce"]
+        .iter()
+        .map(|name| {
+            let problem = load_problem(format!(
+                "{}/fixtures/{name}.json",
+                concat!(env!("CARGO_MANIFEST_DIR"), "/../..")
+            ))
+            .unwrap();
+            let wrenches = (0..6)
+                .map(|k| {
+                    let mut w = problem.wrench;
+                    w[k % 3] *= 1.0 + 0.01 * k as f64;
+                    w
+                })
+                .collect();
+            BatchGrasp { problem, wrenches }
+        })
+        .collect();
+    // (grasp, wrench, the worker thread's allocation count when the answer arrived).
+    let seen = Mutex::new(Vec::with_capacity(64));
+    for threads in [1, 2] {
+        seen.lock().unwrap().clear();
+        let opts = BatchOptions {
+            threads: Some(threads),
+            ..Default::default()
+        };
+        for_each_solution(&grasps[..], &SolverConfig::default(), &opts, |g, k, r| {
+            assert!(r.unwrap().is_optimal());
+            let n = allocations();
+            seen.lock().unwrap().push((g, k, n));
+        })
+        .unwrap();
+        let seen = seen.lock().unwrap();
+        assert_eq!(seen.len(), 24);
+        for g in 0..grasps.len() {
+            let at: Vec<usize> = (0..6)
+                .map(|k| seen.iter().find(|s| s.0 == g && s.1 == k).unwrap().2)
+                .collect();
+            // Between two answers of one grasp only a solve ran, on the same worker;
+            // the first two may still grow the worker's buffers to this grasp's size.
+            assert!(at[2..].iter().all(|&n| n == at[1]), "grasp {g}: {at:?}");
+        }
+    }
+}

@@ -1,0 +1,504 @@
+//! `grasp-torque batch`: one problem per input line, solved in parallel; one result per
+//! output line, in input order.
+
+use super::{ModelArgs, OutputError};
+use anyhow::{Context, Result};
+use grasp_torque::{
+    solve_batch, BatchGrasp, BatchOptions, GraspProblem, ProblemError, ProblemParser, Solution,
+    SolverConfig, Status,
+};
+use rayon::prelude::*;
+use serde_json::{json, Map, Value};
+use std::io::{BufRead, BufReader, IsTerminal, Read, Write};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+#[derive(clap::Args, Debug)]
+pub(crate) struct BatchArgs {
+    /// JSON lines: one problem per line, in any of the three forms, optionally with
+    /// `"wrenches": [[Fx, Fy, Fz, Mx, My, Mz], …]` to solve it for each (sharing one
+    /// model build). `-` reads standard input. Relative robot paths of hand-form lines
+    /// are relative to the file's folder (the working directory for `-`).
+    input: PathBuf,
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Worker threads (default: one per core).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Output: one JSON object per line, or CSV with a header.
+    #[arg(long, value_enum, default_value = "jsonl")]
+    format: BatchFormat,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum BatchFormat {
+    Jsonl,
+    Csv,
+}
+
+/// Lines read and solved together: enough to keep every core busy, few enough that
+/// memory stays flat on inputs of any length.
+const CHUNK_LINES: usize = 4096;
+
+/// The CSV columns. `torque` and `joint_names` hold one value per joint, separated by
+/// spaces; `message` says why a line is not optimal.
+const CSV_HEADER: &str = "line,wrench,status,objective,wrench_residual,torque_residual,consistency_residual,iterations,solve_time_us,torque,joint_names,message";
+
+/// What a batch's lines came to, for the exit code.
+#[derive(Default)]
+struct Tally {
+    lines: usize,
+    records: usize,
+    invalid: usize,
+    infeasible: usize,
+    failed: usize,
+}
+
+impl Tally {
+    /// 2 when a line was invalid, else 4 when a solve failed numerically or hit its
+    /// iteration limit, else 3 when a grasp was infeasible, else 0 (as `solve`).
+    fn exit_code(&self) -> u8 {
+        if self.invalid > 0 {
+            2
+        } else if self.failed > 0 {
+            4
+        } else if self.infeasible > 0 {
+            3
+        } else {
+            0
+        }
+    }
+}
+
+pub(crate) fn run(args: &BatchArgs) -> Result<u8> {
+    if let Some(n) = args.threads {
+        if n == 0 {
+            anyhow::bail!("--threads: expected at least 1, got 0");
+        }
+        // Parsing, solving and formatting all run on this pool.
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .context("--threads: could not start the worker threads")?;
+    }
+    let (reader, size, base): (Box<dyn Read>, Option<u64>, PathBuf) =
+        if args.input.as_os_str() == "-" {
+            (Box::new(std::io::stdin()), None, PathBuf::from("."))
+        } else {
+            let f = std::fs::File::open(&args.input)
+                .with_context(|| format!("{}", args.input.display()))?;
+            let size = f.metadata().ok().map(|m| m.len());
+            let base = args
+                .input
+                .parent()
+                .map(Path::to_path_buf)
+                .unwrap_or_else(|| PathBuf::from("."));
+            (Box::new(f), size, base)
+        };
+    let mut reader = BufReader::with_capacity(1 << 20, reader);
+    let parser = ProblemParser::new();
+    let progress = Progress::new(size);
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    if args.format == BatchFormat::Csv {
+        writeln!(out, "{CSV_HEADER}").map_err(OutputError)?;
+    }
+    let mut tally = Tally::default();
+    let mut line_no = 0;
+    let mut read = 0u64;
+    loop {
+        let mut chunk = Vec::with_capacity(CHUNK_LINES);
+        while chunk.len() < CHUNK_LINES {
+            let Some((text, bytes)) = next_line(&mut reader, &args.input)? else {
+                break;
+            };
+            line_no += 1;
+            read += bytes;
+            // Blank lines are skipped, but still counted for line numbers.
+            if !matches!(&text, Ok(t) if t.trim().is_empty()) {
+                chunk.push((line_no, text));
+            }
+        }
+        if chunk.is_empty() {
+            break;
+        }
+        let records = solve_chunk(&chunk, &parser, &base, &args.model, args.format, &mut tally);
+        for r in records {
+            out.write_all(r.as_bytes()).map_err(OutputError)?;
+        }
+        progress.update(read, tally.lines);
+    }
+    out.flush().map_err(OutputError)?;
+    progress.finish();
+    eprintln!(
+        "batch: {} lines, {} results: {} invalid, {} infeasible, {} failed",
+        tally.lines, tally.records, tally.invalid, tally.infeasible, tally.failed
+    );
+    Ok(tally.exit_code())
+}
+
+/// The longest line read: a problem file's limit.
+const MAX_LINE_BYTES: u64 = grasp_torque::file::MAX_FILE_BYTES;
+
+/// The next line (without its end), or why it is not one, and the bytes consumed;
+/// `None` at the end of input. A line longer than the limit is skipped unread.
+#[allow(clippy::type_complexity)]
+fn next_line(r: &mut impl BufRead, path: &Path) -> Result<Option<(Result<String, String>, u64)>> {
+    let mut buf = Vec::new();
+    let n = r
+        .by_ref()
+        .take(MAX_LINE_BYTES + 1)
+        .read_until(b'\n', &mut buf)
+        .with_context(|| format!("{}", path.display()))?;
+    if n == 0 {
+        return Ok(None);
+    }
+    let mut consumed = n as u64;
+    if buf.last() != Some(&b'\n') && n as u64 > MAX_LINE_BYTES {
+        // Skip the rest of the line without keeping it.
+        loop {
+            let avail = r
+                .fill_buf()
+                .with_context(|| format!("{}", path.display()))?;
+            if avail.is_empty() {
+                break;
+            }
+            let (used, done) = match avail.iter().position(|&b| b == b'\n') {
+                Some(i) => (i + 1, true),
+                None => (avail.len(), false),
+            };
+            r.consume(used);
+            consumed += used as u64;
+            if done {
+                break;
+            }
+        }
+        return Ok(Some((
+            Err(format!(
+                "(input): expected a line of at most {MAX_LINE_BYTES} bytes, got a longer one"
+            )),
+            consumed,
+        )));
+    }
+    while matches!(buf.last(), Some(b'\n' | b'\r')) {
+        buf.pop();
+    }
+    let text = String::from_utf8(buf).map_err(|e| {
+        format!(
+            "(input): expected UTF-8 text (JSON), got invalid UTF-8 at byte {}",
+            e.utf8_error().valid_up_to()
+        )
+    });
+    Ok(Some((text, consumed)))
+}
+
+/// A parsed line: its grasp and wrenches, and the solver configuration of the flags.
+struct Parsed {
+    grasp: BatchGrasp,
+    config: SolverConfig,
+}
+
+fn parse_line(
+    text: &str,
+    parser: &ProblemParser,
+    base: &Path,
+    model: &ModelArgs,
+) -> Result<Parsed, String> {
+    let mut value: Value = serde_json::from_str(text).map_err(|e| {
+        ProblemError::Parse {
+            path: ".".into(),
+            message: e.to_string().split(" at line ").next().unwrap_or("").into(),
+            line: e.line(),
+            column: e.column(),
+        }
+        .to_string()
+    })?;
+    let wrenches = match value.as_object_mut().and_then(|o| o.remove("wrenches")) {
+        None => Vec::new(),
+        Some(w) => wrench_list(&w)?,
+    };
+    let text = if wrenches.is_empty() {
+        std::borrow::Cow::Borrowed(text)
+    } else {
+        std::borrow::Cow::Owned(value.to_string())
+    };
+    let loaded = parser.parse_at(&text, base).map_err(|e| e.to_string())?;
+    let mut problem: GraspProblem = loaded.problem;
+    let config = model
+        .configure(&mut problem)
+        .map_err(|e| format!("{e:#}"))?;
+    Ok(Parsed {
+        grasp: BatchGrasp { problem, wrenches },
+        config,
+    })
+}
+
+fn wrench_list(v: &Value) -> Result<Vec<[f64; 6]>, String> {
+    let bad = |what: String| {
+        format!("wrenches: expected a non-empty list of wrenches [Fx, Fy, Fz, Mx, My, Mz] of finite numbers, got {what}")
+    };
+    let list = v.as_array().ok_or_else(|| bad(v.to_string()))?;
+    if list.is_empty() {
+        return Err(bad("an empty list".into()));
+    }
+    list.iter()
+        .enumerate()
+        .map(|(k, w)| {
+            let nums: Option<Vec<f64>> = w
+                .as_array()
+                .map(|a| a.iter().map(Value::as_f64).collect::<Option<Vec<f64>>>())
+                .unwrap_or(None);
+            match nums {
+                Some(n) if n.len() == 6 && n.iter().all(|x| x.is_finite()) => {
+                    let mut a = [0.0; 6];
+                    a.copy_from_slice(&n);
+                    Ok(a)
+                }
+                _ => Err(bad(format!("wrenches[{k}] = {w}"))),
+            }
+        })
+        .collect()
+}
+
+/// Parses, solves and formats one chunk of lines, in parallel; records in input order.
+fn solve_chunk(
+    chunk: &[(usize, Result<String, String>)],
+    parser: &ProblemParser,
+    base: &Path,
+    model: &ModelArgs,
+    format: BatchFormat,
+    tally: &mut Tally,
+) -> Vec<String> {
+    let parsed: Vec<Result<Parsed, String>> = chunk
+        .par_iter()
+        .map(|(_, text)| {
+            text.as_ref()
+                .map_err(Clone::clone)
+                .and_then(|t| parse_line(t, parser, base, model))
+        })
+        .collect();
+    let n = chunk.len();
+    let mut errors: Vec<Option<String>> = vec![None; n];
+    let mut grasps = Vec::with_capacity(n);
+    let mut line_of = Vec::with_capacity(n);
+    // Every line's configuration comes from the same flags (the problem's own options
+    // travel with the problem): the first good line's serves all.
+    let mut config = None;
+    for (i, p) in parsed.into_iter().enumerate() {
+        match p {
+            Ok(p) => {
+                config.get_or_insert(p.config);
+                grasps.push(p.grasp);
+                line_of.push(i);
+            }
+            Err(e) => errors[i] = Some(e),
+        }
+    }
+    let mut results: Vec<Vec<Solution>> = vec![Vec::new(); n];
+    if let Some(config) = &config {
+        match solve_batch(&grasps, config, &BatchOptions::default()) {
+            Ok(out) => {
+                for r in out {
+                    let i = line_of[r.grasp];
+                    match r.outcome {
+                        Ok(s) => results[i].push(s),
+                        Err(e) => {
+                            errors[i].get_or_insert_with(|| e.to_string());
+                        }
+                    }
+                }
+            }
+            Err(e) => line_of
+                .iter()
+                .for_each(|&i| errors[i] = Some(e.to_string())),
+        }
+    }
+    let mut problem_of: Vec<Option<&GraspProblem>> = vec![None; n];
+    for (g, &i) in line_of.iter().enumerate() {
+        problem_of[i] = Some(&grasps[g].problem);
+    }
+    let records: Vec<(String, Vec<Status>)> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let line = chunk[i].0;
+            match (&errors[i], problem_of[i]) {
+                (None, Some(p)) => {
+                    let sols = &results[i];
+                    let text: String = sols
+                        .iter()
+                        .enumerate()
+                        .map(|(k, s)| record(line, k, p, s, format))
+                        .collect();
+                    (text, sols.iter().map(|s| s.status).collect())
+                }
+                (e, _) => (
+                    error_record(line, e.as_deref().unwrap_or("not solved"), format),
+                    Vec::new(),
+                ),
+            }
+        })
+        .collect();
+    let mut texts = Vec::with_capacity(records.len());
+    for (text, statuses) in records {
+        tally.lines += 1;
+        if statuses.is_empty() {
+            tally.invalid += 1;
+            tally.records += 1;
+        }
+        for s in statuses {
+            tally.records += 1;
+            if s == Status::Infeasible {
+                tally.infeasible += 1;
+            } else if !s.has_answer() {
+                tally.failed += 1;
+            }
+        }
+        texts.push(text);
+    }
+    texts
+}
+
+/// A line that could not be solved: its line number and the same message `solve`
+/// gives for the file.
+fn error_record(line: usize, message: &str, format: BatchFormat) -> String {
+    match format {
+        BatchFormat::Jsonl => {
+            format!(
+                "{{\"line\":{line},\"status\":\"invalid\",\"error\":{}}}\n",
+                json!(message)
+            )
+        }
+        BatchFormat::Csv => format!("{line},,invalid,,,,,,,,,{}\n", csv_field(message)),
+    }
+}
+
+fn record(line: usize, k: usize, p: &GraspProblem, s: &Solution, format: BatchFormat) -> String {
+    let ok = !s.torque.is_empty();
+    let d = &s.diagnostics;
+    let names: Vec<String> = if p.joint_names.is_empty() {
+        Vec::new()
+    } else {
+        (0..p.joints()).map(|j| p.joint_name(j)).collect()
+    };
+    let message = s.reason.as_ref().map(ToString::to_string);
+    match format {
+        BatchFormat::Jsonl => {
+            let mut o = Map::new();
+            o.insert("status".into(), json!(s.status));
+            if let Some(r) = &s.reason {
+                let mut v = serde_json::to_value(r).unwrap_or(Value::Null);
+                if let Some(m) = v.as_object_mut() {
+                    m.insert("message".into(), json!(message));
+                }
+                o.insert("reason".into(), v);
+            }
+            if ok {
+                o.insert("objective".into(), json!(s.objective));
+                o.insert("torque".into(), json!(s.torque));
+                let mut off = 0;
+                let forces: Vec<&[f64]> = p
+                    .contacts
+                    .iter()
+                    .map(|c| {
+                        let f = &s.contact_forces[off..off + c.dim()];
+                        off += c.dim();
+                        f
+                    })
+                    .collect();
+                o.insert("contact_forces".into(), json!(forces));
+                o.insert(
+                    "residuals".into(),
+                    json!({"wrench": d.wrench_residual, "torque": d.torque_residual, "consistency": d.consistency_residual}),
+                );
+            }
+            if !names.is_empty() {
+                o.insert("joint_names".into(), json!(names));
+            }
+            o.insert("iterations".into(), json!(s.iterations));
+            o.insert(
+                "solve_time_us".into(),
+                json!(s.solve_time.as_secs_f64() * 1e6),
+            );
+            // The line and wrench first, so that a reader sees at once what it is.
+            let rest = Value::Object(o).to_string();
+            format!("{{\"line\":{line},\"wrench\":{k},{}\n", &rest[1..])
+        }
+        BatchFormat::Csv => {
+            let num = |x: f64| if ok { format!("{x:e}") } else { String::new() };
+            let torque: Vec<String> = s.torque.iter().map(|t| format!("{t:e}")).collect();
+            format!(
+                "{line},{k},{},{},{},{},{},{},{:.3},{},{},{}\n",
+                s.status,
+                num(s.objective),
+                num(d.wrench_residual),
+                num(d.torque_residual),
+                num(d.consistency_residual),
+                s.iterations,
+                s.solve_time.as_secs_f64() * 1e6,
+                torque.join(" "),
+                csv_field(&names.join(" ")),
+                csv_field(message.as_deref().unwrap_or("")),
+            )
+        }
+    }
+}
+
+/// A CSV field, quoted when it holds a separator, a quote or a line break.
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// A progress bar on standard error, shown only when standard error is a terminal and
+/// standard output is not (results go to a file or a pipe), and only once the batch
+/// has run for a second: short batches and scripts see nothing.
+struct Progress {
+    bar: Option<indicatif::ProgressBar>,
+    start: Instant,
+    shown: std::cell::Cell<bool>,
+}
+
+impl Progress {
+    fn new(size: Option<u64>) -> Self {
+        let wanted = std::io::stderr().is_terminal() && !std::io::stdout().is_terminal();
+        let bar = wanted.then(|| {
+            let bar = indicatif::ProgressBar::with_draw_target(
+                size,
+                indicatif::ProgressDrawTarget::hidden(),
+            );
+            let template = if size.is_some() {
+                "batch [{bar:30}] {percent}% {msg}, {elapsed} (eta {eta})"
+            } else {
+                "batch {spinner} {msg}, {elapsed}"
+            };
+            bar.set_style(
+                indicatif::ProgressStyle::with_template(template)
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            bar
+        });
+        Self {
+            bar,
+            start: Instant::now(),
+            shown: std::cell::Cell::new(false),
+        }
+    }
+
+    fn update(&self, bytes: u64, lines: usize) {
+        let Some(bar) = &self.bar else { return };
+        if !self.shown.get() && self.start.elapsed() > Duration::from_secs(1) {
+            bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+            self.shown.set(true);
+        }
+        bar.set_position(bytes);
+        bar.set_message(format!("{lines} lines"));
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
+}
