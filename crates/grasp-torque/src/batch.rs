@@ -231,13 +231,15 @@ impl Worker {
     }
 }
 
-/// Validates grasp `g` and builds its model and backend; returns the backend and the
-/// problem's initial torque.
+/// A grasp's backend, and the problem's initial torque.
+type Setup = (Box<dyn TorqueSolver>, Option<Vec<f64>>);
+
+/// Validates grasp `g` and builds its model and backend.
 fn setup<S: BatchSource + ?Sized>(
     source: &S,
     g: usize,
     config: &SolverConfig,
-) -> Result<(Box<dyn TorqueSolver>, Option<Vec<f64>>), Error> {
+) -> Result<Setup, Error> {
     let p = source.problem(g)?;
     p.validate()?;
     let model = Arc::new(GraspModel::new(&p, &config.model)?);
@@ -262,7 +264,9 @@ fn run_in<R: Send>(options: &BatchOptions, f: impl FnOnce() -> R + Send) -> Resu
 /// are keyed by process id: a forked child builds its own instead of waiting on the
 /// parent's threads forever.
 fn pool(n: usize) -> Result<Arc<ThreadPool>, BatchError> {
-    static POOLS: Mutex<Option<HashMap<(u32, usize), Arc<ThreadPool>>>> = Mutex::new(None);
+    /// By (process id, threads).
+    type Pools = HashMap<(u32, usize), Arc<ThreadPool>>;
+    static POOLS: Mutex<Option<Pools>> = Mutex::new(None);
     if n == 0 {
         return Err(BatchError::NoThreads);
     }
