@@ -200,7 +200,10 @@ fn a_malformed_line_is_a_record_and_the_batch_goes_on() {
         r[1]
     );
     assert!(
-        r[2]["error"].as_str().unwrap().contains("jacobian_transpose"),
+        r[2]["error"]
+            .as_str()
+            .unwrap()
+            .contains("jacobian_transpose"),
         "{}",
         r[2]
     );

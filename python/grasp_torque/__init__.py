@@ -1,0 +1,422 @@
+"""grasp_torque: the joint torques a dexterous hand should apply to hold an object.
+
+Jia et al.'s key-constraint-set method with the consistency constraints that make the
+torques hold the object, in Rust. One grasp::
+
+    import grasp_torque as gt
+    solver = gt.Solver("fixtures/hand3-pcwf.json", sides=8)
+    r = solver.solve()                 # or solver.solve(wrench)
+    r.status, r.torque, r.objective, r.residuals
+
+Many grasps, straight from numpy, in parallel with the GIL released::
+
+    out = gt.solve_batch(G, JT, W, contacts=[{"model": "pcwf", "mu": 0.5}] * 3)
+    out.torque, out.objective, out.wrench_residual, out.status
+
+Status codes of ``solve_batch`` (``STATUS_CODES`` maps them to names):
+
+====  ==================  =====================================================
+code  name                meaning
+====  ==================  =====================================================
+0     optimal             an optimal torque that passed the residual checks
+1     almost_optimal      reduced accuracy (Clarabel), residual checks passed
+2     infeasible          no torque holds the object within the cones/limits
+3     iteration_limit     the backend stopped before optimality
+4     numerical_failure   the backend failed, or its answer failed the checks
+5     invalid             this item's input was rejected (see ``errors``)
+====  ==================  =====================================================
+
+Items without an answer (codes 2-5) have NaN torque, objective and residual.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections import namedtuple
+from typing import Any, Iterable, Mapping, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _native
+
+__all__ = [
+    "Problem",
+    "Solver",
+    "Result",
+    "solve_batch",
+    "BatchResult",
+    "STATUS_CODES",
+    "INVALID",
+    "backends",
+    "synthetic_grasps",
+]
+
+__version__ = _native.VERSION
+
+Result = _native.Result
+
+STATUS_CODES = {
+    0: "optimal",
+    1: "almost_optimal",
+    2: "infeasible",
+    3: "iteration_limit",
+    4: "numerical_failure",
+    5: "invalid",
+}
+INVALID = _native.INVALID
+
+
+def backends() -> list:
+    """The backends compiled into this build (``active-set``, ``clarabel``)."""
+    return list(_native.backends())
+
+
+def _plain(o: Any) -> Any:
+    """JSON fallback: numpy arrays and scalars as lists and numbers."""
+    if hasattr(o, "tolist"):
+        return o.tolist()
+    if isinstance(o, os.PathLike):
+        return os.fspath(o)
+    raise TypeError(f"{type(o).__name__} is not JSON serialisable")
+
+
+def _dumps(obj: Any) -> str:
+    # allow_nan=False: NaN is not JSON; the message names the value instead of a
+    # parse error deep in the Rust reader.
+    try:
+        return json.dumps(obj, default=_plain, allow_nan=False)
+    except ValueError as e:
+        raise ValueError(f"(input): expected finite numbers: {e}") from None
+
+
+class Problem:
+    """A validated grasp problem.
+
+    Build one from a file (``Problem.load(path)``), from a dict in any of the JSON forms
+    (``Problem.from_dict(d)``: matrix form with ``grasp_matrix`` and
+    ``jacobian_transpose``, geometry form with ``fingers``, hand form with ``hand``), or
+    from arrays (``Problem.from_arrays(G, JT, contacts, wrench)``). Invalid input raises
+    ``ValueError`` with the command line's message.
+    """
+
+    __slots__ = ("_p",)
+
+    def __init__(self, native: "_native.Problem"):
+        self._p = native
+
+    @classmethod
+    def load(cls, path: Union[str, os.PathLike]) -> "Problem":
+        path = os.fspath(path)
+        try:
+            with open(path, encoding="utf-8") as f:
+                text = f.read()
+        except OSError as e:
+            raise ValueError(f"{path}: {e.strerror}") from None
+        try:
+            return cls(_native.Problem.from_json(text, os.path.dirname(path) or "."))
+        except ValueError as e:
+            raise ValueError(f"{path}: {e}") from None
+
+    @classmethod
+    def from_dict(cls, d: Mapping, base: Union[str, os.PathLike] = ".") -> "Problem":
+        """A problem from a dict in any JSON form; a hand's relative ``model`` path is
+        taken relative to ``base``."""
+        return cls(_native.Problem.from_json(_dumps(d), os.fspath(base)))
+
+    @classmethod
+    def from_arrays(
+        cls,
+        grasp_matrix,
+        jacobian_transpose,
+        contacts: Sequence[Mapping],
+        wrench=None,
+        **options: Any,
+    ) -> "Problem":
+        """A matrix-form problem: G (6 × n), Jᵀ (m × n), one contact dict per contact
+        (``{"model": "pcwf", "mu": 0.5}``; ``sfcl``/``sfce`` add ``mu_torsion``), the
+        wrench (default zero) and any option of the matrix form (``torque_weights``,
+        ``torque_limits``, ``min_normal_force``, ``joint_names``, ``linearization``,
+        ``internal_forces``, ``initial_torque``)."""
+        d = {
+            "grasp_matrix": np.asarray(grasp_matrix, dtype=float),
+            "jacobian_transpose": np.asarray(jacobian_transpose, dtype=float),
+            "wrench": np.zeros(6) if wrench is None else np.asarray(wrench, dtype=float),
+            "contacts": list(contacts),
+        }
+        d.update(options)
+        return cls.from_dict(d)
+
+    def to_dict(self) -> dict:
+        """The problem in matrix form (what ``grasp-torque build`` prints)."""
+        return json.loads(self._p.to_json())
+
+    @property
+    def hand(self) -> Optional[dict]:
+        """For the hand form: the robot, defaulted joints, limits source, warnings."""
+        h = self._p.hand_json()
+        return None if h is None else json.loads(h)
+
+    joints = property(lambda self: self._p.joints, doc="m, the number of joints.")
+    force_dim = property(lambda self: self._p.force_dim, doc="n, contact force components.")
+    contacts = property(lambda self: self._p.contacts, doc="The number of contacts.")
+    joint_names = property(lambda self: self._p.joint_names, doc="Names, or None.")
+    wrench = property(lambda self: self._p.wrench, doc="The problem's wrench w.")
+    grasp_matrix = property(lambda self: self._p.grasp_matrix, doc="G, 6 × n.")
+    jacobian_transpose = property(lambda self: self._p.jacobian_transpose, doc="Jᵀ, m × n.")
+
+    def __reduce__(self):
+        hand = self._p.hand_json()
+        return (_problem_from_json, (self._p.to_json(), hand))
+
+    def __repr__(self) -> str:
+        return f"Problem(joints={self.joints}, contacts={self.contacts}, force_dim={self.force_dim})"
+
+
+def _problem_from_json(text: str, hand: Optional[str] = None) -> Problem:
+    return Problem(_native.Problem.from_json(text, ".", hand))
+
+
+def _as_problem(problem: Any) -> Problem:
+    if isinstance(problem, Problem):
+        return problem
+    if isinstance(problem, (str, os.PathLike)):
+        return Problem.load(problem)
+    if isinstance(problem, Mapping):
+        return Problem.from_dict(problem)
+    raise TypeError(
+        f"problem: expected a Problem, a path or a dict, got {type(problem).__name__}"
+    )
+
+
+class Solver:
+    """A solver for one grasp, reused across wrenches (one per control loop).
+
+    ``Solver(problem, backend=None, cones="linear", sides=None, latitudes=None,
+    internal_forces=None, paper_model=False)``: ``problem`` is a ``Problem``, a path or
+    a dict. ``backend`` is ``"active-set"`` or ``"clarabel"`` (default: the first that
+    supports the cones, active-set when it can); ``cones`` is ``"linear"`` (inscribed
+    polyhedra with ``sides`` = N, ``latitudes`` = K) or ``"exact"``. ``sides``,
+    ``latitudes`` and ``internal_forces`` override the problem's own.
+
+    ``solve(wrench=None, warm=True)`` solves for ``wrench`` (the problem's when None),
+    warm-started from the previous optimal answer; it returns a ``Result``.
+    """
+
+    __slots__ = ("_s", "_settings")
+
+    def __init__(
+        self,
+        problem: Any,
+        backend: Optional[str] = None,
+        cones: str = "linear",
+        sides: Optional[int] = None,
+        latitudes: Optional[int] = None,
+        internal_forces: Optional[str] = None,
+        paper_model: bool = False,
+    ):
+        settings = {
+            "backend": backend,
+            "cones": cones,
+            "sides": sides,
+            "latitudes": latitudes,
+            "internal_forces": internal_forces,
+            "paper_model": bool(paper_model),
+        }
+        self._settings = settings
+        self._s = _native.Solver(_as_problem(problem)._p, _dumps(settings))
+
+    def solve(self, wrench=None, warm: bool = True) -> Result:
+        if wrench is not None:
+            w = np.asarray(wrench, dtype=float).reshape(-1)
+            if w.shape != (6,):
+                raise ValueError(
+                    f"wrench: expected 6 numbers [Fx, Fy, Fz, Mx, My, Mz], got {w.size}"
+                )
+            wrench = w.tolist()
+        return self._s.solve(wrench, warm)
+
+    @property
+    def problem(self) -> Problem:
+        """The problem as solved (with the overrides applied)."""
+        return Problem(self._s.problem())
+
+    @property
+    def backend(self) -> str:
+        return self._s.backend
+
+    def __reduce__(self):
+        return (_solver_from_state, (self.problem, self._settings))
+
+    def __repr__(self) -> str:
+        s = self._settings
+        return f"Solver(backend={self.backend!r}, cones={s['cones']!r}, problem={self.problem!r})"
+
+
+def _solver_from_state(problem: Problem, settings: dict) -> Solver:
+    return Solver(problem, **settings)
+
+
+BatchResult = namedtuple("BatchResult", ["torque", "objective", "wrench_residual", "status", "errors"])
+BatchResult.__doc__ = """Arrays of a batch: ``torque[B,(K,)m]``, ``objective[B,(K)]``,
+``wrench_residual[B,(K)]`` (``‖G f − w‖∞``), ``status[B,(K)]`` (int8 codes, see
+``STATUS_CODES``), and ``errors``: ``{(grasp, wrench): message}`` for invalid items."""
+
+
+def _out(name: str, given, shape, dtype):
+    if given is None:
+        return np.empty(shape, dtype=dtype)
+    if not isinstance(given, np.ndarray) or given.dtype != dtype:
+        raise ValueError(f"{name}: expected a numpy array of dtype {np.dtype(dtype).name}")
+    if given.shape != shape or not given.flags.c_contiguous or not given.flags.writeable:
+        raise ValueError(
+            f"{name}: expected a writeable C-contiguous array of shape {shape}, got {given.shape}"
+        )
+    return given
+
+
+def solve_batch(
+    G,
+    JT,
+    W,
+    contacts: Sequence[Mapping],
+    *,
+    backend: Optional[str] = None,
+    cones: str = "linear",
+    sides: Optional[int] = None,
+    latitudes: Optional[int] = None,
+    internal_forces: Optional[str] = None,
+    paper_model: bool = False,
+    torque_weights=None,
+    torque_limits=None,
+    min_normal_force=None,
+    joint_names: Optional[Sequence[str]] = None,
+    threads: Optional[int] = None,
+    warm_start: bool = True,
+    torque: Optional[np.ndarray] = None,
+    objective: Optional[np.ndarray] = None,
+    wrench_residual: Optional[np.ndarray] = None,
+    status: Optional[np.ndarray] = None,
+) -> BatchResult:
+    """Solves B grasps, each for one or K wrenches, in parallel, with the GIL released.
+
+    ``G[B,6,n]`` and ``JT[B,m,n]`` are the grasps; ``W[B,6]`` gives one wrench per grasp
+    and ``W[B,K,6]`` K of them (each grasp's model is built once and its wrenches are
+    solved in order, each warm-started from the previous answer unless
+    ``warm_start=False``). ``contacts``, the limits, weights and minimum normal forces
+    are shared by every grasp. ``threads`` defaults to one per core.
+
+    As in ``mujoco.rollout``, the outputs ``torque``, ``objective``,
+    ``wrench_residual`` (float64) and ``status`` (int8) may be passed preallocated
+    (C-contiguous, of the output shape) and are then filled in place. An invalid or
+    infeasible item never raises: it gets its status code; only arguments that make
+    the whole batch impossible (shapes, contacts, options) raise ``ValueError``.
+    """
+    G = np.ascontiguousarray(G, dtype=np.float64)
+    JT = np.ascontiguousarray(JT, dtype=np.float64)
+    W = np.ascontiguousarray(W, dtype=np.float64)
+    if G.ndim != 3:
+        raise ValueError(f"G: expected shape (B, 6, n), got {G.shape}")
+    if JT.ndim != 3:
+        raise ValueError(f"JT: expected shape (B, m, n), got {JT.shape}")
+    single = W.ndim == 2
+    if single:
+        W3 = W.reshape(W.shape[0], 1, W.shape[1])
+    elif W.ndim == 3:
+        W3 = W
+    else:
+        raise ValueError(f"W: expected shape (B, 6) or (B, K, 6), got {W.shape}")
+    B, K, m = G.shape[0], W3.shape[1], JT.shape[1]
+    lead = (B,) if single else (B, K)
+    torque = _out("torque", torque, lead + (m,), np.float64)
+    objective = _out("objective", objective, lead, np.float64)
+    wrench_residual = _out("wrench_residual", wrench_residual, lead, np.float64)
+    status = _out("status", status, lead, np.int8)
+    spec = {
+        "contacts": list(contacts),
+        "torque_weights": torque_weights,
+        "torque_limits": torque_limits,
+        "min_normal_force": min_normal_force,
+        "joint_names": None if joint_names is None else list(joint_names),
+        "backend": backend,
+        "cones": cones,
+        "sides": sides,
+        "latitudes": latitudes,
+        "internal_forces": internal_forces,
+        "paper_model": bool(paper_model),
+    }
+    if threads is None:
+        threads = _native.default_threads()
+    errors = _native.solve_batch(
+        G,
+        JT,
+        W3,
+        _dumps(spec),
+        int(threads),
+        bool(warm_start),
+        torque.reshape((B, K, m)),
+        objective.reshape((B, K)),
+        wrench_residual.reshape((B, K)),
+        status.reshape((B, K)),
+    )
+    errs = {(g, k) if not single else g: msg for g, k, msg in errors}
+    return BatchResult(torque, objective, wrench_residual, status, errs)
+
+
+def synthetic_grasps(
+    batch: int,
+    fingers: int = 3,
+    joints_per_finger: int = 3,
+    wrenches: int = 0,
+    seed: int = 0,
+):
+    """Random but physically sensible fingertip grasps of a sphere, for trying things
+    and benchmarks: ``(G[B,6,n], JT[B,m,n], W[B,6] or W[B,K,6])`` with point contacts
+    (``n = 3·fingers``, contact frames with z along the inward normal), serial fingers
+    of revolute joints, and the sphere's weight (50–500 g) plus a small disturbance.
+    ``wrenches=K > 0`` adds K load directions per grasp (± 10 % of the weight along
+    each axis, cycling)."""
+    rng = np.random.default_rng(seed)
+    n, m = 3 * fingers, fingers * joints_per_finger
+    G = np.zeros((batch, 6, n))
+    JT = np.zeros((batch, m, n))
+    radius = rng.uniform(0.03, 0.06, batch)
+    base_angle = rng.uniform(0, 2 * np.pi, batch)
+    for f in range(fingers):
+        # Contacts spread around the equator, jittered, a little below it.
+        ang = base_angle + 2 * np.pi * f / fingers + rng.uniform(-0.3, 0.3, batch)
+        elev = rng.uniform(-0.5, 0.2, batch)
+        out = np.stack([np.cos(ang) * np.cos(elev), np.sin(ang) * np.cos(elev), np.sin(elev)], -1)
+        p = out * radius[:, None]
+        z = -out  # the contact normal points into the object
+        helper = np.where(np.abs(z[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
+        x = np.cross(helper, z)
+        x /= np.linalg.norm(x, axis=1, keepdims=True)
+        y = np.cross(z, x)
+        R = np.stack([x, y, z], -1)  # columns: contact frame axes in the object frame
+        cols = slice(3 * f, 3 * f + 3)
+        G[:, :3, cols] = R
+        G[:, 3:, cols] = np.cross(p[:, :, None], R, axisa=1, axisb=1, axisc=1)
+        # The finger: joints from its base outside the sphere towards the contact.
+        base = out * (radius[:, None] + 0.08) + rng.normal(0, 0.01, (batch, 3))
+        tangent = np.cross(out, [[0.0, 0.0, 1.0]])
+        tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-9)
+        for j in range(joints_per_finger):
+            t = j / joints_per_finger
+            q = base + (p - base) * t
+            axis = tangent if j > 0 else np.cross(tangent, out)
+            axis = axis + rng.normal(0, 0.1, (batch, 3))
+            axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+            lever = np.cross(axis, p - q)  # τ = (a × (p − q)) · f_object
+            JT[:, f * joints_per_finger + j, cols] = np.einsum("bi,bij->bj", lever, R)
+    mass = rng.uniform(0.05, 0.5, batch)
+    W = np.zeros((batch, 6))
+    W[:, 2] = mass * 9.81  # the contacts push the object up against gravity
+    W[:, :3] += rng.normal(0, 0.05, (batch, 3)) * mass[:, None]
+    if wrenches:
+        Wk = np.repeat(W[:, None, :], wrenches, axis=1)
+        for k in range(wrenches):
+            axis, sign = (k // 2) % 3, 1.0 if k % 2 == 0 else -1.0
+            Wk[:, k, axis] += sign * 0.1 * mass * 9.81
+        return G, JT, Wk
+    return G, JT, W

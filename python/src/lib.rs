@@ -1,0 +1,741 @@
+//! `grasp_torque._native`: the Rust side of the Python package. A thin shell over the
+//! `grasp-torque` facade; the conveniences (dicts, keyword defaults, named tuples) live
+//! in `grasp_torque/__init__.py`.
+
+use grasp_torque::{
+    file::ContactSpec, file::MatrixFile, for_each_solution, Backend, BatchOptions, BatchSource,
+    Cones, Equilibrium, Error, GraspProblem, GraspSolver, InternalForces, Matrix, ProblemParser,
+    Solution, SolverConfig, Status, WarmStart,
+};
+use numpy::ndarray::{ArrayView2, ArrayView3, Axis};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray3, PyReadwriteArrayDyn, PyUntypedArrayMethods,
+};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
+use std::path::Path;
+use std::sync::{Mutex, OnceLock};
+
+fn invalid(message: impl ToString) -> PyErr {
+    PyValueError::new_err(message.to_string())
+}
+
+/// Robot files read once per process, shared by every hand-form problem that names them.
+fn parser() -> &'static ProblemParser {
+    static P: OnceLock<ProblemParser> = OnceLock::new();
+    P.get_or_init(ProblemParser::new)
+}
+
+/// A validated grasp problem (any of the three JSON forms, or arrays).
+#[pyclass(module = "grasp_torque._native", frozen)]
+struct Problem {
+    inner: GraspProblem,
+    /// The hand form's report (robot, joints defaulted, warnings), as JSON.
+    hand: Option<String>,
+}
+
+#[pymethods]
+impl Problem {
+    /// Parses a problem in any form from JSON text; relative robot paths are taken
+    /// relative to `base`.
+    /// `hand` restores a hand report (unpickling a matrix-form copy of a hand problem).
+    #[staticmethod]
+    #[pyo3(signature = (text, base, hand=None))]
+    fn from_json(text: &str, base: &str, hand: Option<String>) -> PyResult<Self> {
+        let loaded = parser().parse_at(text, Path::new(base)).map_err(invalid)?;
+        let hand = match loaded.hand {
+            Some(h) => Some(serde_json::to_string(&h).map_err(invalid)?),
+            None => hand,
+        };
+        Ok(Self {
+            inner: loaded.problem,
+            hand,
+        })
+    }
+
+    /// The problem in matrix form, as JSON text (what `grasp-torque build` prints).
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string(&MatrixFile::from_problem(&self.inner, None)).map_err(invalid)
+    }
+
+    /// The hand form's report as JSON text, or None.
+    fn hand_json(&self) -> Option<String> {
+        self.hand.clone()
+    }
+
+    #[getter]
+    fn joints(&self) -> usize {
+        self.inner.joints()
+    }
+
+    #[getter]
+    fn force_dim(&self) -> usize {
+        self.inner.force_dim()
+    }
+
+    #[getter]
+    fn contacts(&self) -> usize {
+        self.inner.contacts.len()
+    }
+
+    #[getter]
+    fn joint_names(&self) -> Option<Vec<String>> {
+        names(&self.inner)
+    }
+
+    #[getter]
+    fn wrench<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.wrench.to_vec().into_pyarray(py)
+    }
+
+    #[getter]
+    fn grasp_matrix<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        matrix(py, &self.inner.grasp_matrix)
+    }
+
+    #[getter]
+    fn jacobian_transpose<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        matrix(py, &self.inner.jacobian_transpose)
+    }
+}
+
+fn matrix<'py>(py: Python<'py>, m: &Matrix) -> Bound<'py, PyArray2<f64>> {
+    let (r, c) = (m.nrows(), m.ncols());
+    numpy::ndarray::Array2::from_shape_fn((r, c), |(i, j)| m[(i, j)]).into_pyarray(py)
+}
+
+fn names(p: &GraspProblem) -> Option<Vec<String>> {
+    (!p.joint_names.is_empty()).then(|| p.joint_names.clone())
+}
+
+/// The solver settings that are not part of the problem.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Settings {
+    backend: Option<String>,
+    cones: Option<String>,
+    sides: Option<usize>,
+    latitudes: Option<usize>,
+    internal_forces: Option<String>,
+    paper_model: Option<bool>,
+}
+
+impl Settings {
+    /// Applies the overrides to `p` and returns the configuration, as the CLI's flags
+    /// do (errors name the keyword instead of the flag).
+    fn configure(&self, p: &mut GraspProblem) -> PyResult<SolverConfig> {
+        if let Some(n) = self.sides {
+            p.linearization.sides = n;
+        }
+        if let Some(k) = self.latitudes {
+            p.linearization.latitudes = k;
+        }
+        p.linearization
+            .validate()
+            .map_err(|e| invalid(e.to_string().replace("linearization.", "")))?;
+        if let Some(i) = &self.internal_forces {
+            p.internal_forces = match i.as_str() {
+                "compliance" => InternalForces::Compliance,
+                "euclidean" => InternalForces::Euclidean,
+                "free" => InternalForces::Free,
+                other => {
+                    return Err(invalid(format!(
+                        "internal_forces: unknown `{other}`: expected `compliance`, `euclidean` or `free`"
+                    )))
+                }
+            };
+        }
+        let backend: Option<Backend> = self
+            .backend
+            .as_deref()
+            .map(str::parse)
+            .transpose()
+            .map_err(|e: String| invalid(format!("backend: {e}")))?;
+        let cones: Cones = self
+            .cones
+            .as_deref()
+            .unwrap_or("linear")
+            .parse()
+            .map_err(|e: String| invalid(format!("cones: {e}")))?;
+        let mut config = SolverConfig {
+            backend,
+            cones,
+            ..Default::default()
+        };
+        if self.paper_model == Some(true) {
+            config.model.equilibrium = Equilibrium::PaperModel;
+        }
+        Ok(config)
+    }
+}
+
+/// A solver for one grasp, reused across wrenches (the control-loop object).
+#[pyclass(module = "grasp_torque._native")]
+struct Solver {
+    solver: Mutex<GraspSolver>,
+    problem: GraspProblem,
+    settings_json: String,
+    cones: &'static str,
+}
+
+#[pymethods]
+impl Solver {
+    #[new]
+    fn new(problem: &Problem, settings_json: &str) -> PyResult<Self> {
+        let settings: Settings = serde_json::from_str(settings_json).map_err(invalid)?;
+        let mut p = problem.inner.clone();
+        let config = settings.configure(&mut p)?;
+        let solver = GraspSolver::new(&p, &config).map_err(invalid)?;
+        Ok(Self {
+            solver: Mutex::new(solver),
+            problem: p,
+            settings_json: settings_json.to_string(),
+            cones: config.cones.name(),
+        })
+    }
+
+    /// Solves for `wrench` (the problem's own when None): warm-started from the
+    /// previous optimal answer when `warm`, else from the problem's initial torque.
+    #[pyo3(signature = (wrench=None, warm=true))]
+    fn solve(&self, wrench: Option<[f64; 6]>, warm: bool) -> PyResult<SolveResult> {
+        let w = wrench.unwrap_or(self.problem.wrench);
+        let mut s = self.solver.lock().unwrap_or_else(|e| e.into_inner());
+        let backend = s.backend_name();
+        let sol = if warm {
+            s.resolve(&w)
+        } else {
+            let start = WarmStart {
+                torque: self.problem.initial_torque.as_deref(),
+                active_set: None,
+            };
+            s.solve(&w, &start)
+        }
+        .map_err(invalid)?;
+        Ok(SolveResult::new(sol, &self.problem, backend, self.cones))
+    }
+
+    /// The problem as solved (overrides applied).
+    fn problem(&self) -> Problem {
+        Problem {
+            inner: self.problem.clone(),
+            hand: None,
+        }
+    }
+
+    #[getter]
+    fn backend(&self) -> &'static str {
+        self.solver
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .backend_name()
+    }
+
+    /// The settings given, as JSON (for pickling).
+    fn settings_json(&self) -> String {
+        self.settings_json.clone()
+    }
+}
+
+/// Residuals and margins of a solve (the Rust `Diagnostics`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Checks {
+    wrench_residual: f64,
+    torque_residual: f64,
+    consistency_residual: f64,
+    max_violation: f64,
+    cone_violation: f64,
+    friction_margins: Vec<Option<f64>>,
+    check_tolerance: f64,
+    wrench_check: f64,
+    torque_check: f64,
+}
+
+/// Everything a Python result holds; serialisable, so results pickle.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct ResultData {
+    status: String,
+    reason: Option<serde_json::Value>,
+    torque: Option<Vec<f64>>,
+    contact_forces: Option<Vec<f64>>,
+    contact_dims: Vec<usize>,
+    internal_forces: Vec<f64>,
+    objective: Option<f64>,
+    iterations: usize,
+    active_set: Option<Vec<usize>>,
+    solve_time_us: f64,
+    checks: Checks,
+    joint_names: Option<Vec<String>>,
+    warnings: Vec<String>,
+    backend: String,
+    cones: String,
+}
+
+/// The answer of one solve.
+#[pyclass(module = "grasp_torque._native", frozen, name = "Result")]
+struct SolveResult {
+    data: ResultData,
+}
+
+impl SolveResult {
+    fn new(s: &Solution, p: &GraspProblem, backend: &str, cones: &str) -> Self {
+        let ok = !s.torque.is_empty();
+        let d = &s.diagnostics;
+        let reason = s.reason.as_ref().map(|r| {
+            let mut v = serde_json::to_value(r).unwrap_or(serde_json::Value::Null);
+            if let Some(o) = v.as_object_mut() {
+                o.insert("message".into(), r.to_string().into());
+            }
+            v
+        });
+        Self {
+            data: ResultData {
+                status: s.status.as_str().into(),
+                reason,
+                torque: ok.then(|| s.torque.clone()),
+                contact_forces: ok.then(|| s.contact_forces.clone()),
+                contact_dims: p.contacts.iter().map(|c| c.dim()).collect(),
+                internal_forces: s.internal_forces.clone(),
+                objective: ok.then_some(s.objective),
+                iterations: s.iterations,
+                active_set: s.active_set.clone(),
+                solve_time_us: s.solve_time.as_secs_f64() * 1e6,
+                checks: Checks {
+                    wrench_residual: d.wrench_residual,
+                    torque_residual: d.torque_residual,
+                    consistency_residual: d.consistency_residual,
+                    max_violation: d.max_violation,
+                    cone_violation: d.cone_violation,
+                    friction_margins: d.friction_margins.clone(),
+                    check_tolerance: d.check_tolerance,
+                    wrench_check: d.wrench_check,
+                    torque_check: d.torque_check,
+                },
+                joint_names: names(p),
+                warnings: s.warnings.clone(),
+                backend: backend.into(),
+                cones: cones.into(),
+            },
+        }
+    }
+}
+
+#[pymethods]
+impl SolveResult {
+    /// Rebuilds a result from [`Self::to_json`] (unpickling).
+    #[staticmethod]
+    fn from_json(text: &str) -> PyResult<Self> {
+        Ok(Self {
+            data: serde_json::from_str(text).map_err(invalid)?,
+        })
+    }
+
+    /// Everything, as JSON text.
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string(&self.data).map_err(invalid)
+    }
+
+    #[getter]
+    fn status(&self) -> &str {
+        &self.data.status
+    }
+
+    /// Why the solve is not optimal (the CLI's message), or None.
+    #[getter]
+    fn reason(&self) -> Option<String> {
+        self.data
+            .reason
+            .as_ref()
+            .and_then(|r| r["message"].as_str().map(String::from))
+    }
+
+    /// The reason's details as JSON text (`kind` and its fields), or None.
+    fn reason_json(&self) -> Option<String> {
+        self.data.reason.as_ref().map(|r| r.to_string())
+    }
+
+    #[getter]
+    fn torque<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.data.torque.clone().map(|t| t.into_pyarray(py))
+    }
+
+    #[getter]
+    fn contact_forces<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.data.contact_forces.clone().map(|t| t.into_pyarray(py))
+    }
+
+    #[getter]
+    fn contact_dims(&self) -> Vec<usize> {
+        self.data.contact_dims.clone()
+    }
+
+    #[getter]
+    fn objective(&self) -> Option<f64> {
+        self.data.objective
+    }
+
+    #[getter]
+    fn iterations(&self) -> usize {
+        self.data.iterations
+    }
+
+    #[getter]
+    fn active_set(&self) -> Option<Vec<usize>> {
+        self.data.active_set.clone()
+    }
+
+    #[getter]
+    fn solve_time_us(&self) -> f64 {
+        self.data.solve_time_us
+    }
+
+    #[getter]
+    fn joint_names(&self) -> Option<Vec<String>> {
+        self.data.joint_names.clone()
+    }
+
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.data.warnings.clone()
+    }
+
+    #[getter]
+    fn backend(&self) -> &str {
+        &self.data.backend
+    }
+
+    #[getter]
+    fn cones(&self) -> &str {
+        &self.data.cones
+    }
+
+    /// `‖G f − w‖∞`, `‖Jᵀ f − τ‖∞` and `‖C τ − e‖∞` (None without an answer).
+    #[getter]
+    fn residuals<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        if self.data.torque.is_none() {
+            return Ok(None);
+        }
+        let c = &self.data.checks;
+        let d = PyDict::new(py);
+        d.set_item("wrench", c.wrench_residual)?;
+        d.set_item("torque", c.torque_residual)?;
+        d.set_item("consistency", c.consistency_residual)?;
+        Ok(Some(d))
+    }
+
+    /// Every check of the Rust diagnostics: residuals, violations, friction margins
+    /// per contact, the check's tolerance and how close each check came to it.
+    #[getter]
+    fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        loads(
+            py,
+            &serde_json::to_string(&self.data.checks).map_err(invalid)?,
+        )
+    }
+
+    /// The reason's kind and fields (and `message`), or None.
+    #[getter]
+    fn reason_detail<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        self.data
+            .reason
+            .as_ref()
+            .map(|r| loads(py, &r.to_string()))
+            .transpose()
+    }
+
+    /// `contact_forces` split per contact (None without an answer).
+    #[getter]
+    fn forces_per_contact<'py>(&self, py: Python<'py>) -> Option<Vec<Bound<'py, PyArray1<f64>>>> {
+        let f = self.data.contact_forces.as_ref()?;
+        let mut off = 0;
+        Some(
+            self.data
+                .contact_dims
+                .iter()
+                .map(|&d| {
+                    let v = f[off..off + d].to_vec();
+                    off += d;
+                    v.into_pyarray(py)
+                })
+                .collect(),
+        )
+    }
+
+    /// Everything as plain Python (lists, numbers, dicts).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        loads(py, &self.to_json()?)
+    }
+
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let cls = py.get_type::<SolveResult>();
+        Ok((cls.getattr("from_json")?, (self.to_json()?,)))
+    }
+
+    fn __repr__(&self) -> String {
+        match (self.data.objective, &self.data.torque) {
+            (Some(o), Some(t)) => format!(
+                "Result(status='{}', objective={o:.6e}, torque={t:?})",
+                self.data.status
+            ),
+            _ => format!(
+                "Result(status='{}', reason={:?})",
+                self.data.status,
+                self.reason().unwrap_or_default()
+            ),
+        }
+    }
+}
+
+fn loads<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyAny>> {
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// The integer status codes of `solve_batch`.
+fn status_code(s: Status) -> i8 {
+    match s {
+        Status::Optimal => 0,
+        Status::AlmostOptimal => 1,
+        Status::Infeasible => 2,
+        Status::IterationLimit => 3,
+        _ => 4,
+    }
+}
+
+/// Code of an item whose input was rejected.
+const INVALID: i8 = 5;
+
+/// The options every grasp of a batch shares.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BatchSpec {
+    contacts: Vec<ContactSpec>,
+    torque_weights: Option<Vec<f64>>,
+    torque_limits: Option<Vec<Option<f64>>>,
+    min_normal_force: Option<serde_json::Value>,
+    joint_names: Option<Vec<String>>,
+    #[serde(flatten)]
+    settings: Settings,
+}
+
+/// A batch's grasps, read straight from the caller's arrays.
+struct Arrays<'a> {
+    g: ArrayView3<'a, f64>,
+    jt: ArrayView3<'a, f64>,
+    /// `[B, K, 6]` (K = 1 for `[B, 6]`).
+    w: ArrayView3<'a, f64>,
+    /// Everything but G, Jᵀ and the wrench, with the settings' overrides applied.
+    template: GraspProblem,
+}
+
+impl BatchSource for Arrays<'_> {
+    fn grasps(&self) -> usize {
+        self.g.shape()[0]
+    }
+    fn wrenches(&self, _: usize) -> usize {
+        self.w.shape()[1]
+    }
+    fn problem(&self, b: usize) -> Result<Cow<'_, GraspProblem>, Error> {
+        let (g, jt) = (
+            self.g.index_axis(Axis(0), b),
+            self.jt.index_axis(Axis(0), b),
+        );
+        let mut p = self.template.clone();
+        p.grasp_matrix = to_matrix(g);
+        p.jacobian_transpose = to_matrix(jt);
+        p.wrench = self.wrench(b, 0);
+        Ok(Cow::Owned(p))
+    }
+    fn wrench(&self, b: usize, k: usize) -> [f64; 6] {
+        std::array::from_fn(|i| self.w[(b, k, i)])
+    }
+}
+
+fn to_matrix(a: ArrayView2<'_, f64>) -> Matrix {
+    Matrix::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)])
+}
+
+/// Output array pointers, written by the workers at disjoint indices.
+struct Outputs {
+    torque: *mut f64,
+    objective: *mut f64,
+    residual: *mut f64,
+    status: *mut i8,
+    wrenches: usize,
+    joints: usize,
+}
+
+// SAFETY: each (grasp, wrench) pair is emitted exactly once, and writes only its own
+// elements; the arrays outlive the batch (their borrows are held across it).
+unsafe impl Sync for Outputs {}
+
+impl Outputs {
+    fn write(&self, b: usize, k: usize, r: Result<&Solution, &Error>) {
+        let i = b * self.wrenches + k;
+        let (code, objective, residual, torque) = match r {
+            Ok(s) if !s.torque.is_empty() => (
+                status_code(s.status),
+                s.objective,
+                s.diagnostics.wrench_residual,
+                Some(&s.torque),
+            ),
+            Ok(s) => (status_code(s.status), f64::NAN, f64::NAN, None),
+            Err(_) => (INVALID, f64::NAN, f64::NAN, None),
+        };
+        // SAFETY: i < B·K and the torque row i·m .. (i+1)·m is within B·K·m (shapes
+        // checked before the batch); no other worker writes index i.
+        unsafe {
+            *self.status.add(i) = code;
+            *self.objective.add(i) = objective;
+            *self.residual.add(i) = residual;
+            let row = std::slice::from_raw_parts_mut(self.torque.add(i * self.joints), self.joints);
+            match torque {
+                Some(t) => row.copy_from_slice(t),
+                None => row.fill(f64::NAN),
+            }
+        }
+    }
+}
+
+fn contiguous_out<'py, T: numpy::Element>(
+    name: &str,
+    a: &'py mut PyReadwriteArrayDyn<'_, T>,
+    shape: &[usize],
+) -> PyResult<&'py mut [T]> {
+    if a.shape() != shape {
+        return Err(invalid(format!(
+            "{name}: expected an output array of shape {shape:?}, got {:?}",
+            a.shape()
+        )));
+    }
+    a.as_slice_mut()
+        .map_err(|_| invalid(format!("{name}: expected a C-contiguous output array")))
+}
+
+/// The batch: fills the four output arrays; returns `{grasp: message}` for the grasps
+/// (or wrenches) whose input was rejected.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+fn solve_batch(
+    py: Python<'_>,
+    g: PyReadonlyArray3<'_, f64>,
+    jt: PyReadonlyArray3<'_, f64>,
+    w: PyReadonlyArray3<'_, f64>,
+    spec_json: &str,
+    threads: usize,
+    warm_start: bool,
+    mut torque: PyReadwriteArrayDyn<'_, f64>,
+    mut objective: PyReadwriteArrayDyn<'_, f64>,
+    mut wrench_residual: PyReadwriteArrayDyn<'_, f64>,
+    mut status: PyReadwriteArrayDyn<'_, i8>,
+) -> PyResult<Vec<(usize, usize, String)>> {
+    let spec: BatchSpec = serde_json::from_str(spec_json).map_err(invalid)?;
+    let (gv, jv, wv) = (g.as_array(), jt.as_array(), w.as_array());
+    let (b, six, n) = gv.dim();
+    let (bj, m, nj) = jv.dim();
+    let (bw, k, sixw) = wv.dim();
+    if six != 6 {
+        return Err(invalid(format!(
+            "G: expected shape (B, 6, n), got {:?}",
+            gv.shape()
+        )));
+    }
+    if bj != b || nj != n {
+        return Err(invalid(format!(
+            "JT: expected shape ({b}, m, {n}) to match G {:?}, got {:?}",
+            gv.shape(),
+            jv.shape()
+        )));
+    }
+    if bw != b || sixw != 6 {
+        return Err(invalid(format!(
+            "W: expected shape ({b}, 6) or ({b}, K, 6), got {:?}",
+            wv.shape()
+        )));
+    }
+    if k == 0 {
+        return Err(invalid("W: expected at least one wrench per grasp (K ≥ 1)"));
+    }
+    let contacts = spec
+        .contacts
+        .iter()
+        .enumerate()
+        .map(|(i, c)| c.to_model(&format!("contacts[{i}]")))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(invalid)?;
+    let mut template =
+        GraspProblem::new(Matrix::zeros(6, 0), Matrix::zeros(m, 0), [0.0; 6], contacts);
+    template.joint_names = spec.joint_names.unwrap_or_default();
+    grasp_torque::file::Options {
+        min_normal_force: spec.min_normal_force,
+        torque_weights: spec.torque_weights,
+        torque_limits: spec.torque_limits,
+        ..Default::default()
+    }
+    .apply(&mut template)
+    .map_err(invalid)?;
+    let config = spec.settings.configure(&mut template)?;
+    if threads == 0 {
+        return Err(invalid("threads: expected at least 1 worker thread, got 0"));
+    }
+    let out = Outputs {
+        torque: contiguous_out("torque", &mut torque, &[b, k, m])?.as_mut_ptr(),
+        objective: contiguous_out("objective", &mut objective, &[b, k])?.as_mut_ptr(),
+        residual: contiguous_out("wrench_residual", &mut wrench_residual, &[b, k])?.as_mut_ptr(),
+        status: contiguous_out("status", &mut status, &[b, k])?.as_mut_ptr(),
+        wrenches: k,
+        joints: m,
+    };
+    let source = Arrays {
+        g: gv,
+        jt: jv,
+        w: wv,
+        template,
+    };
+    let options = BatchOptions {
+        threads: Some(threads),
+        warm_start,
+    };
+    let errors = Mutex::new(Vec::new());
+    let result = py.detach(|| {
+        for_each_solution(&source, &config, &options, |gi, ki, r| {
+            if let Err(e) = r {
+                errors
+                    .lock()
+                    .unwrap_or_else(|p| p.into_inner())
+                    .push((gi, ki, e.to_string()));
+            }
+            out.write(gi, ki, r);
+        })
+    });
+    result.map_err(invalid)?;
+    let mut errors = errors.into_inner().unwrap_or_else(|p| p.into_inner());
+    errors.sort_by_key(|e| (e.0, e.1));
+    Ok(errors)
+}
+
+/// The number of cores rayon would use.
+#[pyfunction]
+fn default_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// The backends compiled into this build.
+#[pyfunction]
+fn backends() -> Vec<&'static str> {
+    Backend::compiled().map(|b| b.name()).collect()
+}
+
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Problem>()?;
+    m.add_class::<Solver>()?;
+    m.add_class::<SolveResult>()?;
+    m.add_function(wrap_pyfunction!(solve_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(default_threads, m)?)?;
+    m.add_function(wrap_pyfunction!(backends, m)?)?;
+    m.add("INVALID", INVALID)?;
+    m.add("VERSION", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

@@ -1,0 +1,199 @@
+"""solve_batch: the same answers as one-by-one solves, status codes, preallocated
+outputs, the GIL released, and distribution (fork, process pools, Ray)."""
+
+import concurrent.futures
+import multiprocessing
+import os
+import pickle
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import grasp_torque as gt
+
+PCWF = [{"model": "pcwf", "mu": 0.7}] * 3
+
+
+def one_by_one(G, JT, W, contacts, **kw):
+    """Fresh solver per item, cold."""
+    out = []
+    for b in range(G.shape[0]):
+        p = gt.Problem.from_arrays(G[b], JT[b], contacts, W[b] if W.ndim == 2 else W[b, 0])
+        s = gt.Solver(p, **kw)
+        ws = [W[b]] if W.ndim == 2 else list(W[b])
+        out.append([s.solve(w, warm=False) for w in ws])
+    return out
+
+
+@pytest.mark.parametrize("wrenches", [0, 4])
+def test_batch_matches_one_by_one(wrenches):
+    G, JT, W = gt.synthetic_grasps(120, wrenches=wrenches, seed=3)
+    out = gt.solve_batch(G, JT, W, PCWF, threads=2)
+    alone = one_by_one(G, JT, W, PCWF)
+    K = 1 if W.ndim == 2 else W.shape[1]
+    status = out.status.reshape(-1, K)
+    objective = out.objective.reshape(-1, K)
+    torque = out.torque.reshape(-1, K, JT.shape[1])
+    optimal = 0
+    for b, rs in enumerate(alone):
+        for k, r in enumerate(rs):
+            assert gt.STATUS_CODES[int(status[b, k])] == r.status
+            if r.objective is not None:
+                optimal += 1
+                assert abs(objective[b, k] - r.objective) <= 1e-9 * max(r.objective, 1e-300)
+                np.testing.assert_allclose(torque[b, k], r.torque, rtol=0, atol=1e-9 * np.abs(r.torque).max())
+            else:
+                assert np.isnan(objective[b, k]) and np.isnan(torque[b, k]).all()
+    assert optimal > len(alone) * K // 2
+
+
+def test_soft_fingers_and_options_match_one_by_one():
+    G, JT, W = gt.synthetic_grasps(40, fingers=4, seed=5)
+    # Soft fingers: four columns per contact, the fourth the torsional moment.
+    n = 4 * 4
+    G4 = np.zeros((40, 6, n))
+    JT4 = np.zeros((40, JT.shape[1], n))
+    for c in range(4):
+        G4[:, :, 4 * c : 4 * c + 3] = G[:, :, 3 * c : 3 * c + 3]
+        G4[:, 3:, 4 * c + 3] = G[:, :3, 3 * c + 2]  # mz about the normal
+        JT4[:, :, 4 * c : 4 * c + 3] = JT[:, :, 3 * c : 3 * c + 3]
+    contacts = [{"model": "sfcl", "mu": 0.6, "mu_torsion": 0.01}, {"model": "sfce", "mu": 0.6, "mu_torsion": 0.01}] * 2
+    kw = dict(sides=12, torque_limits=[5.0] * JT.shape[1], min_normal_force=0.05)
+    out = gt.solve_batch(G4, JT4, W, contacts, **kw)
+    for b in range(40):
+        p = gt.Problem.from_arrays(
+            G4[b], JT4[b], contacts, W[b], torque_limits=kw["torque_limits"], min_normal_force=0.05
+        )
+        r = gt.Solver(p, sides=12).solve()
+        assert gt.STATUS_CODES[int(out.status[b])] == r.status
+        if r.objective is not None:
+            assert abs(out.objective[b] - r.objective) <= 1e-9 * r.objective
+
+
+def test_status_codes_for_infeasible_and_invalid_items():
+    G, JT, W = gt.synthetic_grasps(6, seed=1)
+    G[2, 1, 4] = np.nan  # invalid: its grasp matrix
+    W[4] *= 1e6  # infeasible: beyond the torque limits
+    out = gt.solve_batch(G, JT, W, PCWF, torque_limits=[10.0] * JT.shape[1])
+    assert out.status.dtype == np.int8
+    assert out.status[2] == gt.INVALID and out.status[4] == 2
+    assert [int(s) for i, s in enumerate(out.status) if i not in (2, 4)] == [0] * 4
+    assert set(out.errors) == {2} and "grasp_matrix" in out.errors[2]
+    assert np.isnan(out.torque[2]).all() and np.isnan(out.objective[4])
+    # Whole-batch errors raise, naming the argument.
+    with pytest.raises(ValueError, match="JT"):
+        gt.solve_batch(G, JT[:, :, :5], W, PCWF)
+    with pytest.raises(ValueError, match="W"):
+        gt.solve_batch(G, JT, W[:, :5], PCWF)
+    with pytest.raises(ValueError, match="contacts\\[0\\]"):
+        gt.solve_batch(G, JT, W, [{"model": "pcwf", "mu": -1}] * 3)
+    with pytest.raises(ValueError, match="threads"):
+        gt.solve_batch(G, JT, W, PCWF, threads=0)
+
+
+def test_preallocated_outputs_are_filled_in_place():
+    G, JT, W = gt.synthetic_grasps(50, wrenches=3, seed=2)
+    m = JT.shape[1]
+    torque = np.full((50, 3, m), -1.0)
+    objective = np.empty((50, 3))
+    residual = np.empty((50, 3))
+    status = np.full((50, 3), 9, dtype=np.int8)
+    out = gt.solve_batch(G, JT, W, PCWF, torque=torque, objective=objective, wrench_residual=residual, status=status)
+    assert out.torque is torque and out.status is status
+    fresh = gt.solve_batch(G, JT, W, PCWF)
+    np.testing.assert_array_equal(torque, fresh.torque)
+    np.testing.assert_array_equal(status, fresh.status)
+    with pytest.raises(ValueError, match="torque"):
+        gt.solve_batch(G, JT, W, PCWF, torque=np.empty((50, m)))
+    with pytest.raises(ValueError, match="status"):
+        gt.solve_batch(G, JT, W, PCWF, status=np.empty((50, 3)))
+
+
+def test_the_gil_is_released():
+    G, JT, W = gt.synthetic_grasps(4000, seed=4)
+    t0 = time.perf_counter()
+    gt.solve_batch(G, JT, W, PCWF, threads=1)
+    alone = time.perf_counter() - t0
+    spans = []
+
+    def work():
+        a = time.perf_counter()
+        gt.solve_batch(G, JT, W, PCWF, threads=1)
+        spans.append((a, time.perf_counter()))
+
+    ticks = []
+    t = threading.Thread(target=work)
+    t.start()
+    while t.is_alive():
+        ticks.append(time.perf_counter())
+        time.sleep(0.001)
+    t.join()
+    (a, b), = spans
+    # Python kept running while the batch ran: many ticks strictly inside its span.
+    inside = [x for x in ticks if a + 0.1 * (b - a) < x < b - 0.1 * (b - a)]
+    assert len(inside) >= 10, (len(inside), b - a, alone)
+    # Two Python threads calling solve_batch overlap.
+    spans.clear()
+    threads = [threading.Thread(target=work) for _ in range(2)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    (a1, b1), (a2, b2) = spans
+    assert min(b1, b2) > max(a1, a2), "the two batches did not overlap"
+
+
+def _child_batch(conn):
+    G, JT, W = gt.synthetic_grasps(200, seed=6)
+    conn.send(gt.solve_batch(G, JT, W, PCWF, threads=2).objective)
+    conn.close()
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="fork is a Linux start method here")
+def test_fork_after_use_is_safe():
+    G, JT, W = gt.synthetic_grasps(200, seed=6)
+    expected = gt.solve_batch(G, JT, W, PCWF, threads=2).objective  # the pool exists now
+    ctx = multiprocessing.get_context("fork")
+    parent, child = ctx.Pipe()
+    p = ctx.Process(target=_child_batch, args=(child,))
+    p.start()
+    assert parent.poll(60), "the forked child hung"
+    got = parent.recv()
+    p.join(10)
+    assert p.exitcode == 0
+    np.testing.assert_array_equal(got, expected)
+
+
+def _solve_pickled(blob):
+    solver, wrench = pickle.loads(blob)
+    return solver.solve(wrench).objective
+
+
+def test_process_pools_take_pickled_solvers(root):
+    s = gt.Solver(root / "fixtures" / "hand5-pcwf.json")
+    w = s.problem.wrench
+    wrenches = [w * (1 + 0.01 * k) for k in range(4)]
+    expected = [s.solve(x, warm=False).objective for x in wrenches]
+    with concurrent.futures.ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn")) as ex:
+        got = list(ex.map(_solve_pickled, [pickle.dumps((s, x)) for x in wrenches]))
+    assert all(abs(a - b) <= 1e-9 * b for a, b in zip(got, expected))
+
+
+def test_ray_example_runs(root):
+    pytest.importorskip("ray", reason="Ray is installed by .ci/run (pip install ray)")
+    script = root / "examples" / "python" / "ray_batch.py"
+    env = dict(os.environ, RAY_DISABLE_USAGE_STATS="1", RAY_USAGE_STATS_ENABLED="0")
+    out = subprocess.run(
+        [sys.executable, str(script), "--grasps", "2000", "--chunks", "4", "--check"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env=env,
+    )
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "grasps/s" in out.stdout
+    assert "matches the local batch" in out.stdout

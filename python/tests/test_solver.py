@@ -1,0 +1,162 @@
+"""One grasp at a time: agreement with the Rust CLI and with the independent reference
+optima, every input form, results, errors and pickling."""
+
+import json
+import pickle
+import subprocess
+
+import numpy as np
+import pytest
+
+import grasp_torque as gt
+from conftest import fixture_files, reference_cases
+
+
+def cli_solve(cli, path, *flags):
+    out = subprocess.run(
+        [cli, "solve", str(path), "--format", "json", *flags], capture_output=True, text=True
+    )
+    return json.loads(out.stdout) if out.stdout else None, out
+
+
+def rel_close(a, b, rtol):
+    return abs(a - b) <= rtol * max(abs(a), abs(b), 1e-300)
+
+
+def test_import_and_backends():
+    assert gt.__version__
+    assert "active-set" in gt.backends()
+    assert gt.STATUS_CODES[gt.INVALID] == "invalid"
+
+
+@pytest.mark.parametrize("path", fixture_files(), ids=lambda p: p.name)
+def test_bundled_fixtures_match_the_cli(cli, path):
+    expected, _ = cli_solve(cli, path)
+    r = gt.Solver(path).solve()
+    assert r.status == expected["status"]
+    assert rel_close(r.objective, expected["objective"], 1e-8)
+    np.testing.assert_allclose(
+        r.torque, expected["torque"], rtol=0, atol=1e-8 * max(np.abs(expected["torque"]))
+    )
+    if path.parent.name == "hands":
+        assert r.joint_names is not None
+    if r.joint_names is not None:
+        assert r.joint_names == expected["joint_names"]
+    assert r.residuals["wrench"] <= 1e-9 * max(1.0, np.abs(gt.Problem.load(path).wrench).max())
+    assert r.diagnostics["wrench_check"] <= 1.0
+    assert sum(r.contact_dims) == len(r.contact_forces)
+    assert len(r.forces_per_contact) == len(r.contact_dims)
+
+
+@pytest.mark.parametrize("case", reference_cases(), ids=lambda c: c["name"])
+def test_reference_cases_match_the_cli_and_the_reference(cli, case, tmp_path):
+    problem = case["problem"]
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps(problem))
+    expected, _ = cli_solve(cli, path)
+    r = gt.Solver(problem).solve()
+    assert r.status == expected["status"]
+    if r.objective is not None:
+        assert rel_close(r.objective, expected["objective"], 1e-8)
+    # The independent optimum, in the reference's conventions (Euclidean A⁺, the
+    # paper's SFCe latitudes): `shared/reference/README.md`.
+    ref = case["reference"]["N8"]
+    as_ref = dict(problem, internal_forces="euclidean", linearization={"sfce_spacing": "paper"})
+    r = gt.Solver(as_ref).solve()
+    if ref["status"] == "optimal":
+        assert r.status == "optimal"
+        assert rel_close(r.objective, ref["objective"], 1e-8), (r.objective, ref["objective"])
+    else:
+        assert r.status == "infeasible"
+
+
+def test_every_form_and_arrays_give_one_problem(root):
+    path = root / "fixtures" / "hand3-pcwf.json"
+    d = json.loads(path.read_text())
+    from_file = gt.Problem.load(path)
+    from_dict = gt.Problem.from_dict(d)
+    from_arrays = gt.Problem.from_arrays(
+        np.array(d["grasp_matrix"]),
+        np.array(d["jacobian_transpose"]),
+        d["contacts"],
+        d["wrench"],
+        internal_forces=d["internal_forces"],
+    )
+    objectives = {gt.Solver(p).solve().objective for p in (from_file, from_dict, from_arrays, str(path), d)}
+    assert len(objectives) == 1
+    assert from_arrays.joints == 9 and from_arrays.force_dim == 9 and from_arrays.contacts == 3
+    np.testing.assert_array_equal(from_arrays.grasp_matrix, np.array(d["grasp_matrix"]))
+    # The hand form, from a dict with a base folder for the robot's path.
+    hand = json.loads((root / "fixtures" / "hands" / "allegro-pinch.json").read_text())
+    p = gt.Problem.from_dict(hand, base=root / "fixtures" / "hands")
+    assert p.hand["torque_limits"] == "model"
+    assert p.joint_names and len(p.joint_names) == p.joints
+
+
+def test_solver_options_and_warm_solves(root):
+    path = root / "fixtures" / "hand5-mixed.json"
+    s = gt.Solver(path, sides=16)
+    cold = s.solve(warm=False)
+    w = gt.Problem.load(path).wrench * 1.01
+    warm = s.solve(w)
+    again = gt.Solver(path, sides=16).solve(w, warm=False)
+    assert rel_close(warm.objective, again.objective, 1e-9)
+    assert cold.objective <= gt.Solver(path, sides=8).solve().objective * (1 + 1e-9)
+    if "clarabel" in gt.backends():
+        exact = gt.Solver(path, cones="exact").solve()
+        assert exact.backend == "clarabel" and exact.cones == "exact"
+        assert exact.objective <= cold.objective * (1 + 1e-6)
+
+
+def test_invalid_input_raises_the_cli_message(cli, root, tmp_path):
+    bad = json.loads((root / "fixtures" / "hand3-pcwf.json").read_text())
+    bad["contacts"][1]["mu"] = -0.5
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(bad))
+    _, out = cli_solve(cli, path)
+    assert out.returncode == 2
+    with pytest.raises(ValueError) as e:
+        gt.Problem.load(path)
+    # The CLI prints `error: <path>: <message>`.
+    assert out.stderr.strip() == f"error: {e.value}"
+    with pytest.raises(ValueError, match="contacts\\[1\\]"):
+        gt.Problem.from_dict(bad)
+    with pytest.raises(ValueError, match="sides"):
+        gt.Solver(root / "fixtures" / "hand3-pcwf.json", sides=2)
+    with pytest.raises(ValueError, match="backend"):
+        gt.Solver(root / "fixtures" / "hand3-pcwf.json", backend="cplex")
+    with pytest.raises(ValueError, match="wrench"):
+        gt.Solver(root / "fixtures" / "hand3-pcwf.json").solve([1, 2, 3])
+    with pytest.raises(ValueError, match="wrench\\[0\\]"):
+        gt.Solver(root / "fixtures" / "hand3-pcwf.json").solve([np.nan, 0, 0, 0, 0, 0])
+    with pytest.raises(ValueError, match="finite"):
+        gt.Problem.from_arrays(np.full((6, 3), np.nan), np.ones((1, 3)), [{"model": "pcwf", "mu": 1}])
+
+
+def test_infeasible_is_a_result_not_an_exception(root):
+    d = json.loads((root / "fixtures" / "hand3-pcwf.json").read_text())
+    d["torque_limits"] = [1e-6] * 9
+    r = gt.Solver(d).solve()
+    assert r.status == "infeasible"
+    assert r.torque is None and r.objective is None and r.residuals is None
+    assert r.reason and "torque" in r.reason
+    assert r.reason_detail["kind"]
+
+
+def test_problems_solvers_and_results_pickle(root):
+    hand = root / "fixtures" / "hands" / "ability-tripod.json"
+    for path in (root / "fixtures" / "hand4-sfce.json", hand):
+        p = gt.Problem.load(path)
+        q = pickle.loads(pickle.dumps(p))
+        assert q.to_dict() == p.to_dict()
+        assert q.hand == p.hand
+        s = gt.Solver(p, sides=12)
+        r = s.solve()
+        s2 = pickle.loads(pickle.dumps(s))
+        r2 = s2.solve()
+        assert r2.objective == r.objective
+        r3 = pickle.loads(pickle.dumps(r))
+        assert r3.to_dict() == r.to_dict()
+        np.testing.assert_array_equal(r3.torque, r.torque)
+        assert r3.diagnostics == r.diagnostics
+        assert "optimal" in repr(r3)
