@@ -125,8 +125,15 @@ fn orthogonalise(cols: &mut [Vec<f64>], w: &mut [Vec<f64>], negligible: f64) -> 
 /// Completes orthonormal columns `q` (each of length `len`) to an orthonormal basis:
 /// the trailing columns of the Householder Q of `[q]` span their complement.
 fn complete(q: &[Vec<f64>], len: usize) -> Vec<Vec<f64>> {
-    let (vs, _) = householder(q.to_vec());
-    (q.len()..len).map(|e| q_column(&vs, len, e)).collect()
+    let k = q.len();
+    let mut w: Vec<f64> = q.iter().flatten().copied().collect();
+    let (mut vhead, mut tau) = (vec![0.0; k], vec![0.0; k]);
+    householder(&mut w, len, k, &mut vhead, &mut tau);
+    let full = explicit_q(&w, len, k, &vhead, &tau);
+    full[k * len..]
+        .chunks_exact(len)
+        .map(<[f64]>::to_vec)
+        .collect()
 }
 
 /// Full SVD of `a`. Empty matrices give empty factors.
@@ -219,7 +226,19 @@ impl Decomposition {
 
     /// The pseudo-inverse `A⁺ = row_basis · row_transform`.
     pub fn pseudo_inverse(&self) -> Matrix {
-        self.row_basis.matmul(&self.row_transform)
+        // The QR path of a full-column-rank A has row_basis = I: A⁺ is row_transform.
+        let b = &self.row_basis;
+        let identity = b.nrows() == b.ncols()
+            && (0..b.nrows()).all(|i| {
+                b.row(i)
+                    .iter()
+                    .enumerate()
+                    .all(|(j, &x)| x == (i == j) as u8 as f64)
+            });
+        if identity {
+            return self.row_transform.clone();
+        }
+        b.matmul(&self.row_transform)
     }
 }
 
@@ -232,90 +251,101 @@ pub enum RankThreshold {
     Absolute(f64),
 }
 
-/// Householder QR of the columns `cols` (k columns of length `len ≥ k`): the reflector
-/// vectors and R (k × k, column-major: `r[j][i]` for i ≤ j).
-fn householder(mut cols: Vec<Vec<f64>>) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
-    let k = cols.len();
-    let mut vs = Vec::with_capacity(k);
+/// Householder QR of `k` columns of length `len ≥ k`, stored column-major in `w`
+/// (column c at `w[c·len..]`). On return the upper triangle of the first k rows holds
+/// R, and reflector c is `v = w[c·len + c..(c+1)·len]` below the diagonal with
+/// `v[0] = vhead[c]`, applied as `I − tau[c] v vᵀ` (tau 0: no reflection).
+fn householder(w: &mut [f64], len: usize, k: usize, vhead: &mut [f64], tau: &mut [f64]) {
     for c in 0..k {
-        let x = &cols[c][c..];
+        let (col, later) = w[c * len..].split_at_mut(len);
+        let x = &mut col[c..];
         let norm = dot(x, x).sqrt();
-        let mut v = x.to_vec();
-        v[0] += if x[0] >= 0.0 { norm } else { -norm };
-        let vn = dot(&v, &v);
+        let alpha = if x[0] >= 0.0 { -norm } else { norm };
+        let head = x[0] - alpha;
+        // ‖v‖² with v = x − alpha e₁.
+        let vn = head * head + dot(&x[1..], &x[1..]);
         if vn > 0.0 {
-            for col in cols.iter_mut().skip(c) {
-                let f = 2.0 * dot(&v, &col[c..]) / vn;
-                for (y, vi) in col[c..].iter_mut().zip(&v) {
-                    *y -= f * vi;
+            let t = 2.0 / vn;
+            for other in later.chunks_exact_mut(len) {
+                let y = &mut other[c..];
+                let f = t * (head * y[0] + dot(&x[1..], &y[1..]));
+                y[0] -= f * head;
+                for (yi, vi) in y[1..].iter_mut().zip(&x[1..]) {
+                    *yi -= f * vi;
                 }
             }
+            tau[c] = t;
+            x[0] = alpha;
+        } else {
+            tau[c] = 0.0;
         }
-        vs.push(v);
+        vhead[c] = head;
     }
-    let r = cols.into_iter().map(|mut c| {
-        c.truncate(k);
-        c
-    });
-    (vs, r.collect())
 }
 
-/// Column `e` of Q = H_1 … H_k (length `len`).
-fn q_column(vs: &[Vec<f64>], len: usize, e: usize) -> Vec<f64> {
-    let mut y = vec![0.0; len];
-    y[e] = 1.0;
-    for c in (0..vs.len()).rev() {
-        let v = &vs[c];
-        let vn = dot(v, v);
-        if vn > 0.0 {
-            let f = 2.0 * dot(v, &y[c..]) / vn;
-            for (yi, vi) in y[c..].iter_mut().zip(v) {
+/// Q = H_0 … H_{k−1} of [`householder`]'s output, column-major len × len: the
+/// reflectors applied to I from the last one. Reflector c leaves rows < c alone, and
+/// columns e < c are still e_e there, so it touches columns c.. only.
+fn explicit_q(w: &[f64], len: usize, k: usize, vhead: &[f64], tau: &[f64]) -> Vec<f64> {
+    let mut q = vec![0.0; len * len];
+    for e in 0..len {
+        q[e * len + e] = 1.0;
+    }
+    for c in (0..k).rev() {
+        if tau[c] == 0.0 {
+            continue;
+        }
+        let v = &w[c * len + c + 1..(c + 1) * len];
+        let (h, t) = (vhead[c], tau[c]);
+        for e in c..len {
+            let y = &mut q[e * len + c..(e + 1) * len];
+            let f = t * (h * y[0] + dot(v, &y[1..]));
+            y[0] -= f * h;
+            for (yi, vi) in y[1..].iter_mut().zip(v) {
                 *yi -= f * vi;
             }
         }
     }
-    y
-}
-
-/// R⁻¹ of an upper-triangular k × k R (column-major), or `None` if a diagonal is 0.
-fn triangular_inverse(r: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
-    let k = r.len();
-    // Column j of R⁻¹ solves R x = e_j by back substitution.
-    let mut inv = vec![vec![0.0; k]; k];
-    for j in 0..k {
-        let x = &mut inv[j];
-        for i in (0..=j).rev() {
-            let mut s = if i == j { 1.0 } else { 0.0 };
-            for l in i + 1..=j {
-                s -= r[l][i] * x[l];
-            }
-            if r[i][i] == 0.0 {
-                return None;
-            }
-            x[i] = s / r[i][i];
-        }
-    }
-    Some(inv)
+    q
 }
 
 /// The fast path: Householder QR of the longer side when A has full rank by a
 /// margin (`‖R‖_F ‖R⁻¹‖_F < 1e6`, so `σ_min/σ_max > 1e-6` and no rank decision near
-/// any threshold in use is at stake); `None` otherwise.
+/// any threshold in use is at stake); `None` otherwise. Flat buffers, one allocation
+/// each: the model of every grasp passes here, so a batch of grasps is mostly this.
 fn decompose_qr(a: &Matrix, threshold: RankThreshold) -> Option<Decomposition> {
     let (rows, cols) = (a.nrows(), a.ncols());
     let wide = rows < cols;
     let (len, k) = if wide { (cols, rows) } else { (rows, cols) };
-    let m: Vec<Vec<f64>> = (0..k)
-        .map(|c| {
-            (0..len)
-                .map(|i| if wide { a[(c, i)] } else { a[(i, c)] })
-                .collect()
-        })
-        .collect();
-    let (vs, r) = householder(m);
-    let rinv = triangular_inverse(&r)?;
-    let fro = |x: &[Vec<f64>]| x.iter().map(|c| dot(c, c)).sum::<f64>().sqrt();
-    let (nr, ni) = (fro(&r), fro(&rinv));
+    // Column c of the longer side: a column of A, or a row of A when wide.
+    let mut w = vec![0.0; len * k];
+    for c in 0..k {
+        for i in 0..len {
+            w[c * len + i] = if wide { a[(c, i)] } else { a[(i, c)] };
+        }
+    }
+    let (mut vhead, mut tau) = (vec![0.0; k], vec![0.0; k]);
+    householder(&mut w, len, k, &mut vhead, &mut tau);
+    let r = |i: usize, j: usize| w[j * len + i];
+    // R⁻¹ (column-major, k × k) by back substitution, column by column.
+    let mut rinv = vec![0.0; k * k];
+    for j in 0..k {
+        for i in (0..=j).rev() {
+            let mut s = if i == j { 1.0 } else { 0.0 };
+            for l in i + 1..=j {
+                s -= r(i, l) * rinv[j * k + l];
+            }
+            if r(i, i) == 0.0 {
+                return None;
+            }
+            rinv[j * k + i] = s / r(i, i);
+        }
+    }
+    let nr = (0..k)
+        .map(|j| (0..=j).map(|i| r(i, j) * r(i, j)).sum::<f64>())
+        .sum::<f64>()
+        .sqrt();
+    let ni = dot(&rinv, &rinv).sqrt();
     if (nr * ni).is_nan() || nr * ni >= 1e6 {
         return None;
     }
@@ -325,25 +355,21 @@ fn decompose_qr(a: &Matrix, threshold: RankThreshold) -> Option<Decomposition> {
             return None;
         }
     }
-    let q: Vec<Vec<f64>> = (0..len).map(|e| q_column(&vs, len, e)).collect();
-    // q[e] is column e of Q (len × len).
-    let qm = |i: usize, j: usize| q[j][i];
+    let q = explicit_q(&w, len, k, &vhead, &tau);
+    let qm = |i: usize, j: usize| q[j * len + i];
     Some(if wide {
         // Aᵀ = Q₁ R: A = Rᵀ Q₁ᵀ, so A x = b ⇔ Q₁ᵀ x = R⁻ᵀ b.
         Decomposition {
             row_basis: Matrix::from_fn(cols, rows, qm),
-            row_transform: Matrix::from_fn(rows, rows, |i, j| rinv[i][j]),
+            row_transform: Matrix::from_fn(rows, rows, |i, j| rinv[i * k + j]),
             null_basis: Matrix::from_fn(cols, cols - rows, |i, j| qm(i, rows + j)),
             left_null: Matrix::zeros(rows, 0),
         }
     } else {
         // A = Q₁ R: A x = b ⇔ x = R⁻¹ Q₁ᵀ b (b in the range).
-        let mut t = Matrix::zeros(cols, rows);
-        for i in 0..cols {
-            for j in 0..rows {
-                t[(i, j)] = (i..cols).map(|l| rinv[l][i] * q[l][j]).sum();
-            }
-        }
+        let t = Matrix::from_fn(cols, rows, |i, j| {
+            (i..cols).map(|l| rinv[l * k + i] * q[l * len + j]).sum()
+        });
         Decomposition {
             row_basis: Matrix::identity(cols),
             row_transform: t,

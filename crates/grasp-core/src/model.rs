@@ -151,7 +151,14 @@ impl GraspModel {
             return Err(ModelError::RankTolerance(opts.rank_tolerance));
         }
         let (n, m) = (p.force_dim(), p.joints());
-        let a = p.grasp_matrix.vstack(&p.jacobian_transpose);
+        // Row i of A = [G; Jᵀ], without stacking a copy.
+        let a_row = |i: usize| {
+            if i < 6 {
+                p.grasp_matrix.row(i)
+            } else {
+                p.jacobian_transpose.row(i - 6)
+            }
+        };
         // Column metric D: mz counts as mz/mu_torsion in the compliance metric.
         let mut force_unit = vec![1.0; n];
         let mut offsets = Vec::with_capacity(p.contacts.len());
@@ -176,10 +183,13 @@ impl GraspModel {
         // depend on row weights) keeps R = I, so that Z is eq. 49's.
         let equilibrate = opts.equilibrium == Equilibrium::Consistent
             && p.internal_forces != InternalForces::Euclidean;
-        let ad = Matrix::from_fn(6 + m, n, |i, j| a[(i, j)] * dinv[j]);
+        let mut scaled = vec![0.0; n];
         let r: Vec<f64> = (0..6 + m)
             .map(|i| {
-                let nrm = crate::matrix::norm2(ad.row(i));
+                for ((s, x), d) in scaled.iter_mut().zip(a_row(i)).zip(&dinv) {
+                    *s = x * d;
+                }
+                let nrm = crate::matrix::norm2(&scaled);
                 if equilibrate && nrm > 0.0 {
                     1.0 / nrm
                 } else {
@@ -187,7 +197,8 @@ impl GraspModel {
                 }
             })
             .collect();
-        let mat = Matrix::from_fn(6 + m, n, |i, j| ad[(i, j)] * r[i]);
+        // R A D⁻¹.
+        let mat = Matrix::from_fn(6 + m, n, |i, j| a_row(i)[j] * dinv[j] * r[i]);
         let dec = decompose(&mat, RankThreshold::Relative(opts.rank_tolerance)).map_err(|_| {
             ModelError::Decomposition {
                 what: "[G; Jᵀ]",
@@ -197,10 +208,9 @@ impl GraspModel {
         })?;
         let rank = dec.rank();
         let zm = dec.pseudo_inverse();
-        // Z = D⁻¹ (R A D⁻¹)⁺ R.
-        let z = Matrix::from_fn(n, 6 + m, |i, j| dinv[i] * zm[(i, j)] * r[j]);
-        let z1 = z.columns(0, 6);
-        let z2 = z.columns(6, 6 + m);
+        // Z = D⁻¹ (R A D⁻¹)⁺ R, split into Z1 (wrench) and Z2 (torque).
+        let z1 = Matrix::from_fn(n, 6, |i, j| dinv[i] * zm[(i, j)] * r[j]);
+        let z2 = Matrix::from_fn(n, m, |i, j| dinv[i] * zm[(i, 6 + j)] * r[6 + j]);
         let passive_basis = Matrix::from_fn(n, n - rank, |i, k| dinv[i] * dec.null_basis[(i, k)]);
         let mut wrench_scale = [1.0; 6];
         wrench_scale.copy_from_slice(&r[..6]);
@@ -271,7 +281,7 @@ impl GraspModel {
             torque_scale: r[6..].to_vec(),
             row_reach: (0..6 + m)
                 .map(|i| {
-                    a.row(i)
+                    a_row(i)
                         .iter()
                         .zip(&force_unit)
                         .map(|(x, u)| (x * u).abs())

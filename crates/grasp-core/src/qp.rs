@@ -97,12 +97,18 @@ pub struct Constraints {
 impl Constraints {
     /// Every contact inscribed at `lin` (assumed validated).
     pub fn inscribed(model: &GraspModel, lin: &Linearization) -> Self {
+        // Hands repeat contact models (one friction coefficient for every fingertip):
+        // each distinct one is built once.
+        let mut cones: Vec<ConeRepr> = Vec::with_capacity(model.contacts.len());
+        for (i, c) in model.contacts.iter().enumerate() {
+            let cone = match model.contacts[..i].iter().position(|d| d == c) {
+                Some(j) => cones[j].clone(),
+                None => ConeRepr::Inscribed(inscribed_cone(c, lin)),
+            };
+            cones.push(cone);
+        }
         Self {
-            cones: model
-                .contacts
-                .iter()
-                .map(|c| ConeRepr::Inscribed(inscribed_cone(c, lin)))
-                .collect(),
+            cones,
             linearization: Some(*lin),
         }
     }
