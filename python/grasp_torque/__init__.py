@@ -403,7 +403,9 @@ def synthetic_grasps(
         tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-9)
         for j in range(joints_per_finger):
             t = j / joints_per_finger
-            q = base + (p - base) * t
+            # A bent finger: joints off the straight line to the contact, so that the
+            # finger's levers span all three directions (a straight one is singular).
+            q = base + (p - base) * t + (j > 0) * rng.normal(0, 0.015, (batch, 3))
             axis = tangent if j > 0 else np.cross(tangent, out)
             axis = axis + rng.normal(0, 0.1, (batch, 3))
             axis /= np.linalg.norm(axis, axis=1, keepdims=True)
