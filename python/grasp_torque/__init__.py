@@ -193,11 +193,12 @@ class Solver:
     """A solver for one grasp, reused across wrenches (one per control loop).
 
     ``Solver(problem, backend=None, cones="linear", sides=None, latitudes=None,
-    internal_forces=None, paper_model=False)``: ``problem`` is a ``Problem``, a path or
+    internal_forces=None, paper_model=False, sfce_spacing=None)``: ``problem`` is a ``Problem``, a path or
     a dict. ``backend`` is ``"active-set"`` or ``"clarabel"`` (default: the first that
     supports the cones, active-set when it can); ``cones`` is ``"linear"`` (inscribed
     polyhedra with ``sides`` = N, ``latitudes`` = K) or ``"exact"``. ``sides``,
-    ``latitudes`` and ``internal_forces`` override the problem's own.
+    ``latitudes``, ``sfce_spacing`` (``"uniform"`` or ``"paper"``) and
+    ``internal_forces`` override the problem's own.
 
     ``solve(wrench=None, warm=True)`` solves for ``wrench`` (the problem's when None),
     warm-started from the previous optimal answer; it returns a ``Result``.
@@ -214,12 +215,14 @@ class Solver:
         latitudes: Optional[int] = None,
         internal_forces: Optional[str] = None,
         paper_model: bool = False,
+        sfce_spacing: Optional[str] = None,
     ):
         settings = {
             "backend": backend,
             "cones": cones,
             "sides": sides,
             "latitudes": latitudes,
+            "sfce_spacing": sfce_spacing,
             "internal_forces": internal_forces,
             "paper_model": bool(paper_model),
         }
@@ -285,6 +288,7 @@ def solve_batch(
     cones: str = "linear",
     sides: Optional[int] = None,
     latitudes: Optional[int] = None,
+    sfce_spacing: Optional[str] = None,
     internal_forces: Optional[str] = None,
     paper_model: bool = False,
     torque_weights=None,
@@ -342,6 +346,7 @@ def solve_batch(
         "cones": cones,
         "sides": sides,
         "latitudes": latitudes,
+        "sfce_spacing": sfce_spacing,
         "internal_forces": internal_forces,
         "paper_model": bool(paper_model),
     }

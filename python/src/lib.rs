@@ -4,8 +4,8 @@
 
 use grasp_torque::{
     file::ContactSpec, file::MatrixFile, for_each_solution, Backend, BatchOptions, BatchSource,
-    Cones, Equilibrium, Error, GraspProblem, GraspSolver, InternalForces, Matrix, ProblemParser,
-    Solution, SolverConfig, Status, WarmStart,
+    Error, GraspProblem, GraspSolver, Matrix, Overrides, ProblemParser, SfceSpacing, Solution,
+    SolverConfig, Status, WarmStart,
 };
 use numpy::ndarray::{ArrayView2, ArrayView3, Axis};
 use numpy::{
@@ -119,6 +119,7 @@ struct Settings {
     cones: Option<String>,
     sides: Option<usize>,
     latitudes: Option<usize>,
+    sfce_spacing: Option<String>,
     internal_forces: Option<String>,
     paper_model: Option<bool>,
 }
@@ -127,48 +128,34 @@ impl Settings {
     /// Applies the overrides to `p` and returns the configuration, as the CLI's flags
     /// do (errors name the keyword instead of the flag).
     fn configure(&self, p: &mut GraspProblem) -> PyResult<SolverConfig> {
-        if let Some(n) = self.sides {
-            p.linearization.sides = n;
+        fn parsed<T: std::str::FromStr<Err = String>>(
+            name: &str,
+            v: Option<&str>,
+        ) -> PyResult<Option<T>> {
+            v.map(str::parse)
+                .transpose()
+                .map_err(|e| invalid(format!("{name}: {e}")))
         }
-        if let Some(k) = self.latitudes {
-            p.linearization.latitudes = k;
-        }
-        p.linearization
-            .validate()
-            .map_err(|e| invalid(e.to_string().replace("linearization.", "")))?;
-        if let Some(i) = &self.internal_forces {
-            p.internal_forces = match i.as_str() {
-                "compliance" => InternalForces::Compliance,
-                "euclidean" => InternalForces::Euclidean,
-                "free" => InternalForces::Free,
-                other => {
+        Overrides {
+            backend: parsed("backend", self.backend.as_deref())?,
+            cones: parsed("cones", self.cones.as_deref())?.unwrap_or_default(),
+            sides: self.sides,
+            latitudes: self.latitudes,
+            sfce_spacing: match self.sfce_spacing.as_deref() {
+                None => None,
+                Some("uniform") => Some(SfceSpacing::Uniform),
+                Some("paper") => Some(SfceSpacing::Paper),
+                Some(other) => {
                     return Err(invalid(format!(
-                        "internal_forces: unknown `{other}`: expected `compliance`, `euclidean` or `free`"
+                        "sfce_spacing: unknown `{other}`: expected `uniform` or `paper`"
                     )))
                 }
-            };
+            },
+            internal_forces: parsed("internal_forces", self.internal_forces.as_deref())?,
+            paper_model: self.paper_model == Some(true),
         }
-        let backend: Option<Backend> = self
-            .backend
-            .as_deref()
-            .map(str::parse)
-            .transpose()
-            .map_err(|e: String| invalid(format!("backend: {e}")))?;
-        let cones: Cones = self
-            .cones
-            .as_deref()
-            .unwrap_or("linear")
-            .parse()
-            .map_err(|e: String| invalid(format!("cones: {e}")))?;
-        let mut config = SolverConfig {
-            backend,
-            cones,
-            ..Default::default()
-        };
-        if self.paper_model == Some(true) {
-            config.model.equilibrium = Equilibrium::PaperModel;
-        }
-        Ok(config)
+        .apply(p)
+        .map_err(|e| invalid(e.to_string().replace("linearization.", "")))
     }
 }
 
@@ -544,7 +531,8 @@ impl BatchSource for Arrays<'_> {
         let mut p = self.template.clone();
         p.grasp_matrix = to_matrix(g);
         p.jacobian_transpose = to_matrix(jt);
-        p.wrench = self.wrench(b, 0);
+        // Each wrench is checked when it is solved: a bad first wrench fails only itself.
+        p.wrench = [0.0; 6];
         Ok(Cow::Owned(p))
     }
     fn wrench(&self, b: usize, k: usize) -> [f64; 6] {

@@ -84,6 +84,14 @@ def test_status_codes_for_infeasible_and_invalid_items():
     assert [int(s) for i, s in enumerate(out.status) if i not in (2, 4)] == [0] * 4
     assert set(out.errors) == {2} and "grasp_matrix" in out.errors[2]
     assert np.isnan(out.torque[2]).all() and np.isnan(out.objective[4])
+    # A bad wrench among several fails only itself; beyond 1e12 is as bad as NaN.
+    G2, JT2, W2 = gt.synthetic_grasps(2, wrenches=3, seed=1)
+    W2[0, 1, 0] = 1e300
+    W2[1, 0, 5] = np.nan
+    out2 = gt.solve_batch(G2, JT2, W2, PCWF)
+    assert out2.status.tolist() == [[0, 5, 0], [5, 0, 0]]
+    assert "at most 1e12" in out2.errors[(0, 1)] and "wrench[5]" in out2.errors[(1, 0)]
+    assert np.isfinite(out2.objective[out2.status == 0]).all()
     # Whole-batch errors raise, naming the argument.
     with pytest.raises(ValueError, match="JT"):
         gt.solve_batch(G, JT[:, :, :5], W, PCWF)
@@ -93,6 +101,8 @@ def test_status_codes_for_infeasible_and_invalid_items():
         gt.solve_batch(G, JT, W, [{"model": "pcwf", "mu": -1}] * 3)
     with pytest.raises(ValueError, match="threads"):
         gt.solve_batch(G, JT, W, PCWF, threads=0)
+    with pytest.raises(ValueError, match="at most 1024"):
+        gt.solve_batch(G, JT, W, PCWF, threads=10**6)
 
 
 def test_preallocated_outputs_are_filled_in_place():

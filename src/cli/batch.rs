@@ -72,8 +72,11 @@ impl Tally {
 
 pub(crate) fn run(args: &BatchArgs) -> Result<u8> {
     if let Some(n) = args.threads {
-        if n == 0 {
-            anyhow::bail!("--threads: expected at least 1, got 0");
+        if n == 0 || n > grasp_torque::batch::MAX_THREADS {
+            anyhow::bail!(
+                "--threads: expected 1 to {}, got {n}",
+                grasp_torque::batch::MAX_THREADS
+            );
         }
         // Parsing, solving and formatting all run on this pool.
         rayon::ThreadPoolBuilder::new()

@@ -31,7 +31,7 @@ mod table;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use grasp_torque::{
-    Backend, Cones, Equilibrium, GraspProblem, InternalForces, SfceSpacing, SolverConfig,
+    Backend, Cones, GraspProblem, InternalForces, Overrides, SfceSpacing, SolverConfig,
 };
 use std::path::PathBuf;
 
@@ -123,28 +123,6 @@ pub(crate) enum Internal {
 impl ModelArgs {
     /// Applies the overrides to `p` and returns the solver configuration.
     pub(crate) fn configure(&self, p: &mut GraspProblem) -> Result<SolverConfig> {
-        if let Some(n) = self.sides {
-            p.linearization.sides = n;
-        }
-        if let Some(k) = self.latitudes {
-            p.linearization.latitudes = k;
-        }
-        if let Some(s) = self.sfce_spacing {
-            p.linearization.sfce_spacing = match s {
-                Spacing::Paper => SfceSpacing::Paper,
-                Spacing::Uniform => SfceSpacing::Uniform,
-            };
-        }
-        p.linearization
-            .validate()
-            .map_err(|e| anyhow::anyhow!("{}", e.to_string().replace("linearization.", "--")))?;
-        if let Some(i) = self.internal_forces {
-            p.internal_forces = match i {
-                Internal::Compliance => InternalForces::Compliance,
-                Internal::Euclidean => InternalForces::Euclidean,
-                Internal::Free => InternalForces::Free,
-            };
-        }
         let backend: Option<Backend> = self
             .backend
             .as_deref()
@@ -155,15 +133,24 @@ impl ModelArgs {
             .cones
             .parse()
             .map_err(|e: String| anyhow::anyhow!("--cones: {e}"))?;
-        let mut config = SolverConfig {
+        Overrides {
             backend,
             cones,
-            ..Default::default()
-        };
-        if self.paper_model {
-            config.model.equilibrium = Equilibrium::PaperModel;
+            sides: self.sides,
+            latitudes: self.latitudes,
+            sfce_spacing: self.sfce_spacing.map(|s| match s {
+                Spacing::Paper => SfceSpacing::Paper,
+                Spacing::Uniform => SfceSpacing::Uniform,
+            }),
+            internal_forces: self.internal_forces.map(|i| match i {
+                Internal::Compliance => InternalForces::Compliance,
+                Internal::Euclidean => InternalForces::Euclidean,
+                Internal::Free => InternalForces::Free,
+            }),
+            paper_model: self.paper_model,
         }
-        Ok(config)
+        .apply(p)
+        .map_err(|e| anyhow::anyhow!("{}", e.to_string().replace("linearization.", "--")))
     }
 }
 

@@ -54,6 +54,20 @@ impl InternalForces {
     }
 }
 
+impl std::str::FromStr for InternalForces {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "compliance" => Ok(Self::Compliance),
+            "euclidean" => Ok(Self::Euclidean),
+            "free" => Ok(Self::Free),
+            _ => Err(format!(
+                "unknown `{s}`: expected `compliance`, `euclidean` or `free`"
+            )),
+        }
+    }
+}
+
 /// Whether `C τ = e` is enforced.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]

@@ -276,11 +276,17 @@ pub enum WarmStartError {
         /// Linear rows.
         rows: usize,
     },
-    /// A wrench that is not finite.
-    #[error("wrench[{index}]: expected a finite number")]
-    WrenchNotFinite {
+    /// A wrench component that is not finite or beyond the input domain (the same
+    /// bound as a problem file's wrench).
+    #[error(
+        "wrench[{index}]: expected a finite number of magnitude at most {:e}, got {value:e}",
+        crate::problem::MAX_MAGNITUDE
+    )]
+    Wrench {
         /// Component.
         index: usize,
+        /// Its value.
+        value: f64,
     },
 }
 
@@ -363,8 +369,14 @@ pub fn solve(
 }
 
 fn check_inputs(qp: &TorqueQp, w: &[f64; 6], warm: &WarmStart<'_>) -> Result<(), WarmStartError> {
-    if let Some(index) = w.iter().position(|v| !v.is_finite()) {
-        return Err(WarmStartError::WrenchNotFinite { index });
+    if let Some(index) = w
+        .iter()
+        .position(|v| v.is_nan() || v.abs() > crate::problem::MAX_MAGNITUDE)
+    {
+        return Err(WarmStartError::Wrench {
+            index,
+            value: w[index],
+        });
     }
     if let Some(t) = warm.torque {
         if t.len() != qp.joints() {

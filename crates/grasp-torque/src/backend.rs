@@ -1,8 +1,9 @@
 //! Backend selection: the one place that knows every backend.
 
+use grasp_core::cone::LinearizationError;
 use grasp_core::{
-    Capabilities, GraspModel, GraspProblem, InternalForces, Linearization, ModelOptions, TorqueQp,
-    TorqueSolver,
+    Capabilities, Equilibrium, GraspModel, GraspProblem, InternalForces, Linearization,
+    ModelOptions, SfceSpacing, TorqueQp, TorqueSolver,
 };
 use std::fmt;
 use std::str::FromStr;
@@ -199,6 +200,55 @@ impl FromStr for Backend {
 impl fmt::Display for Backend {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
+    }
+}
+
+/// The options a caller sets over a problem's own: the command line's flags and the
+/// Python keywords, applied the same way by both.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Overrides {
+    /// The backend (default: the first compiled one that supports the problem).
+    pub backend: Option<Backend>,
+    /// The cones. Default: linear.
+    pub cones: Cones,
+    /// N, sides of the inscribed polygons (the problem's own when `None`).
+    pub sides: Option<usize>,
+    /// K, latitudes per hemisphere of SFCe polyhedra.
+    pub latitudes: Option<usize>,
+    /// Placement of SFCe latitudes.
+    pub sfce_spacing: Option<SfceSpacing>,
+    /// How the passive internal forces are fixed.
+    pub internal_forces: Option<InternalForces>,
+    /// The paper's model, without the consistency equalities.
+    pub paper_model: bool,
+}
+
+impl Overrides {
+    /// Applies the overrides to `p` and returns the solver configuration; an invalid
+    /// linearisation is refused before anything is built.
+    pub fn apply(&self, p: &mut GraspProblem) -> Result<SolverConfig, LinearizationError> {
+        if let Some(n) = self.sides {
+            p.linearization.sides = n;
+        }
+        if let Some(k) = self.latitudes {
+            p.linearization.latitudes = k;
+        }
+        if let Some(s) = self.sfce_spacing {
+            p.linearization.sfce_spacing = s;
+        }
+        p.linearization.validate()?;
+        if let Some(i) = self.internal_forces {
+            p.internal_forces = i;
+        }
+        let mut config = SolverConfig {
+            backend: self.backend,
+            cones: self.cones,
+            ..Default::default()
+        };
+        if self.paper_model {
+            config.model.equilibrium = Equilibrium::PaperModel;
+        }
+        Ok(config)
     }
 }
 

@@ -16,6 +16,10 @@ use std::borrow::Cow;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
+/// Most worker threads a batch starts: far more than cores only costs memory and
+/// start-up time.
+pub const MAX_THREADS: usize = 1024;
+
 /// How a batch runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BatchOptions {
@@ -45,6 +49,9 @@ pub enum BatchError {
     /// `threads` is 0.
     #[error("threads: expected at least 1 worker thread, got 0")]
     NoThreads,
+    /// `threads` is above [`MAX_THREADS`].
+    #[error("threads: expected at most {MAX_THREADS} worker threads, got {0}")]
+    TooManyThreads(usize),
     /// The operating system refused the worker threads.
     #[error("could not start {threads} worker threads: {source}")]
     ThreadPool {
@@ -269,6 +276,9 @@ fn pool(n: usize) -> Result<Arc<ThreadPool>, BatchError> {
     static POOLS: Mutex<Option<Pools>> = Mutex::new(None);
     if n == 0 {
         return Err(BatchError::NoThreads);
+    }
+    if n > MAX_THREADS {
+        return Err(BatchError::TooManyThreads(n));
     }
     let key = (std::process::id(), n);
     // A child forked while another thread held the lock would wait forever: build a

@@ -14,7 +14,7 @@ pub use grasp_clarabel::{ClarabelSettings, ClarabelSolver};
 pub use grasp_osqp::{OsqpSettings, OsqpSolver};
 
 mod backend;
-pub use backend::{Backend, BackendError, Cones, SolverConfig};
+pub use backend::{Backend, BackendError, Cones, Overrides, SolverConfig};
 pub mod batch;
 pub mod sweep;
 pub use batch::{

@@ -216,6 +216,16 @@ fn thread_counts_and_pools_change_nothing() {
     )
     .unwrap_err();
     assert!(matches!(err, BatchError::NoThreads), "{err}");
+    let err = solve_batch(
+        &grasps,
+        &config,
+        &BatchOptions {
+            threads: Some(1_000_000),
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("at most 1024"), "{err}");
     assert!(err.to_string().contains("threads"), "{err}");
 }
 
