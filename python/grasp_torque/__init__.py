@@ -189,6 +189,19 @@ def _as_problem(problem: Any) -> Problem:
     )
 
 
+def _settings(backend, cones, sides, latitudes, sfce_spacing, internal_forces, paper_model) -> dict:
+    """The solver keywords, as the Rust side reads them (the CLI's flags)."""
+    return {
+        "backend": backend,
+        "cones": cones,
+        "sides": sides,
+        "latitudes": latitudes,
+        "sfce_spacing": sfce_spacing,
+        "internal_forces": internal_forces,
+        "paper_model": bool(paper_model),
+    }
+
+
 class Solver:
     """A solver for one grasp, reused across wrenches (one per control loop).
 
@@ -217,15 +230,7 @@ class Solver:
         paper_model: bool = False,
         sfce_spacing: Optional[str] = None,
     ):
-        settings = {
-            "backend": backend,
-            "cones": cones,
-            "sides": sides,
-            "latitudes": latitudes,
-            "sfce_spacing": sfce_spacing,
-            "internal_forces": internal_forces,
-            "paper_model": bool(paper_model),
-        }
+        settings = _settings(backend, cones, sides, latitudes, sfce_spacing, internal_forces, paper_model)
         self._settings = settings
         self._s = _native.Solver(_as_problem(problem)._p, _dumps(settings))
 
@@ -342,13 +347,7 @@ def solve_batch(
         "torque_limits": torque_limits,
         "min_normal_force": min_normal_force,
         "joint_names": None if joint_names is None else list(joint_names),
-        "backend": backend,
-        "cones": cones,
-        "sides": sides,
-        "latitudes": latitudes,
-        "sfce_spacing": sfce_spacing,
-        "internal_forces": internal_forces,
-        "paper_model": bool(paper_model),
+        **_settings(backend, cones, sides, latitudes, sfce_spacing, internal_forces, paper_model),
     }
     if threads is None:
         threads = _native.default_threads()
