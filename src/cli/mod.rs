@@ -18,8 +18,10 @@ macro_rules! out {
 }
 
 mod batch;
+mod bench;
 mod build;
 mod compare;
+mod export_qp;
 mod format;
 mod hand;
 mod solve;
@@ -51,6 +53,11 @@ enum Command {
     /// Solve many problems, one per line of a JSON-lines file, in parallel: one result
     /// per output line (JSON lines or CSV), in input order, with its line number.
     Batch(batch::BatchArgs),
+    /// Time one problem in-process: median build, cold and warm solve (µs).
+    Bench(bench::BenchArgs),
+    /// Print the linearised QP exactly as the native solver receives it (H, c(w), C,
+    /// e(w), weights), with the native answer, for peers to solve like for like.
+    ExportQp(export_qp::ExportQpArgs),
     /// Print a problem file (any form) in matrix form, ready for `solve`.
     Build(build::BuildArgs),
     /// List a URDF hand's links, independent joints (limits, efforts), mimic couplings
@@ -203,6 +210,8 @@ pub(crate) fn run() -> Result<u8> {
     let code = match cli.command {
         Command::Solve(args) => solve::run(&args),
         Command::Batch(args) => batch::run(&args),
+        Command::Bench(args) => bench::run(&args),
+        Command::ExportQp(args) => export_qp::run(&args),
         Command::Build(args) => build::run(&args),
         Command::Hand(args) => hand::run(&args),
         #[cfg(feature = "active-set")]
