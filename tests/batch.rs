@@ -251,3 +251,51 @@ fn exit_codes_csv_and_flags() {
     assert_eq!(missing.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("nope.jsonl"));
 }
+
+#[test]
+fn hostile_lines_are_records_never_crashes() {
+    let good = std::fs::read_to_string(root().join("fixtures/hand3-pcwf.json"))
+        .unwrap()
+        .replace('\n', " ");
+    let mut huge_wrench: Value = serde_json::from_str(&good).unwrap();
+    huge_wrench["wrenches"] = serde_json::json!([[0, 0, 1e300, 0, 0, 0]]);
+    let mut missing_robot: Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("fixtures/hands/allegro-pinch.json")).unwrap(),
+    )
+    .unwrap();
+    missing_robot["hand"]["model"] = Value::String("/nonexistent/hand.urdf".into());
+    let mut input: Vec<u8> = Vec::new();
+    for line in [
+        good.as_bytes().to_vec(),
+        b"\xff\xfe{not utf-8}".to_vec(),
+        "[".repeat(100_000).into_bytes(),
+        b"[1, 2, 3]".to_vec(),
+        huge_wrench.to_string().into_bytes(),
+        missing_robot.to_string().into_bytes(),
+        b"{\"grasp_matrix\": [[1e400]]}".to_vec(),
+        good.as_bytes().to_vec(),
+    ] {
+        input.extend(line);
+        input.push(b'\n');
+    }
+    let dir = temp_dir("hostile");
+    let path = dir.join("in.jsonl");
+    std::fs::write(&path, input).unwrap();
+    let out = run(&["batch", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let r = lines(&out);
+    let status: Vec<&str> = r.iter().map(|r| r["status"].as_str().unwrap()).collect();
+    assert_eq!(
+        status,
+        ["optimal", "invalid", "invalid", "invalid", "invalid", "invalid", "invalid", "optimal"]
+    );
+    let errors: Vec<&str> = r[1..7]
+        .iter()
+        .map(|r| r["error"].as_str().unwrap())
+        .collect();
+    assert!(errors[0].contains("UTF-8"), "{}", errors[0]);
+    assert!(errors[2].contains("JSON object"), "{}", errors[2]);
+    assert!(errors[3].contains("wrenches[0]"), "{}", errors[3]);
+    assert!(errors[4].contains("hand.model"), "{}", errors[4]);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
+}

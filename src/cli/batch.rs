@@ -237,7 +237,10 @@ fn parse_line(
 
 fn wrench_list(v: &Value) -> Result<Vec<[f64; 6]>, String> {
     let bad = |what: String| {
-        format!("wrenches: expected a non-empty list of wrenches [Fx, Fy, Fz, Mx, My, Mz] of finite numbers, got {what}")
+        format!(
+            "wrenches: expected a non-empty list of wrenches [Fx, Fy, Fz, Mx, My, Mz] of numbers of magnitude at most {:e}, got {what}",
+            grasp_torque::problem::MAX_MAGNITUDE
+        )
     };
     let list = v.as_array().ok_or_else(|| bad(v.to_string()))?;
     if list.is_empty() {
@@ -251,7 +254,11 @@ fn wrench_list(v: &Value) -> Result<Vec<[f64; 6]>, String> {
                 .map(|a| a.iter().map(Value::as_f64).collect::<Option<Vec<f64>>>())
                 .unwrap_or(None);
             match nums {
-                Some(n) if n.len() == 6 && n.iter().all(|x| x.is_finite()) => {
+                Some(n)
+                    if n.len() == 6
+                        && n.iter()
+                            .all(|x| x.abs() <= grasp_torque::problem::MAX_MAGNITUDE) =>
+                {
                     let mut a = [0.0; 6];
                     a.copy_from_slice(&n);
                     Ok(a)
