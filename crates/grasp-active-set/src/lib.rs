@@ -220,6 +220,8 @@ struct Engine {
     fixed: Vec<usize>,
     fixed_c0: Vec<f64>,
     fixed_m: Matrix,
+    /// Rounding floor of a fixed row's value per unit of `‖w‖∞`.
+    fixed_floor: f64,
     ws: Workspace,
 }
 
@@ -341,6 +343,14 @@ impl Engine {
         let mn = Matrix::from_fn(nr, 6, |r, j| mfull[(h_row[r], j)] / norms[h_row[r]]);
         let fixed_c0 = fixed.iter().map(|&i| qp.c0[i]).collect();
         let fixed_m = Matrix::from_fn(fixed.len(), 6, |r, j| mfull[(fixed[r], j)]);
+        // A fixed row whose wrench terms are themselves rounding (a contact that neither
+        // torque nor wrench loads, as an unactuated joint can leave one) is judged
+        // against the rounding of the largest wrench row.
+        let fixed_floor = 1e3
+            * f64::EPSILON
+            * (0..rows)
+                .map(|i| mfull.row(i).iter().map(|v| v.abs()).sum::<f64>())
+                .fold(0.0, f64::max);
         let kp = k + 1;
         let ws = Workspace {
             b: vec![0.0; nr],
@@ -372,6 +382,7 @@ impl Engine {
             fixed,
             fixed_c0,
             fixed_m,
+            fixed_floor,
             ws,
         })
     }
@@ -433,7 +444,7 @@ impl Engine {
                     .zip(w)
                     .map(|(a, b)| (a * b).abs())
                     .sum::<f64>();
-            if c > self.settings.feasibility_tolerance * scale {
+            if c > self.settings.feasibility_tolerance * scale + self.fixed_floor * norm_inf(w) {
                 out.status = Status::Infeasible;
                 out.reason = Some(Reason::FixedRowViolated {
                     row: self.rows[row],

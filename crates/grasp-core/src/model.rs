@@ -107,8 +107,14 @@ impl Default for ModelOptions {
 pub struct GraspModel {
     /// G, 6 × n.
     pub grasp_matrix: Matrix,
-    /// Jᵀ, m × n.
+    /// Jᵀ, m × n, in the torques the solver chooses: `T⁺ Jᵀ` (a × n) with a
+    /// transmission, so that `u = T⁺ Jᵀ f`.
     pub jacobian_transpose: Matrix,
+    /// `E = Q₂ᵀ Jᵀ`, k × n: `E f = 0` keeps `Jᵀ f` in the range of T (Q₂ spans the joint
+    /// torques no actuator produces). Empty without an underactuated transmission.
+    pub unactuated: Matrix,
+    /// The joint space behind an actuated model (`None` when T is absent or I).
+    pub actuators: Option<ActuatorSpace>,
     /// The contacts, in the column order of G.
     pub contacts: Vec<ContactModel>,
     /// Index of each contact's first force component in f.
@@ -119,7 +125,8 @@ pub struct GraspModel {
     pub torque_limits: Vec<Option<f64>>,
     /// `fz ≥ value` per contact (0 by default).
     pub min_normal_force: Vec<f64>,
-    /// Joint names (empty when unknown).
+    /// Names of the torques the solver chooses: actuators with a transmission, else
+    /// joints (empty when unknown).
     pub joint_names: Vec<String>,
     /// How the passive internal forces are fixed.
     pub internal_forces: InternalForces,
@@ -147,15 +154,111 @@ pub struct GraspModel {
     pub wrench_scale: [f64; 6],
     /// The row equilibration of the torque rows of A, likewise.
     pub torque_scale: Vec<f64>,
+    /// The row equilibration of the rows of E, likewise.
+    pub unactuated_scale: Vec<f64>,
     /// Per force component, the length that turns it into a force: `mu_torsion` for
     /// `mz`, 1 otherwise. `|f_j| / force_unit_j` is in force units whatever the
     /// assumption, which makes the residual check unit-invariant.
     pub force_unit: Vec<f64>,
     /// `1 / force_unit`, for the hot path.
     pub force_unit_inv: Vec<f64>,
-    /// Per row of `[G; Jᵀ]`, `Σ_j |a_ij| · force_unit_j`: how strongly a unit force
+    /// Per row of `[G; E; Jᵀ]`, `Σ_j |a_ij| · force_unit_j`: how strongly a unit force
     /// (mz counted as mz/mu_torsion) reaches the row, for the residual check's scale.
     pub row_reach: Vec<f64>,
+}
+
+/// The joint space of a model whose torques are actuator forces: `τ = T u`.
+#[derive(Clone, Debug)]
+pub struct ActuatorSpace {
+    /// T, m × a.
+    pub transmission: Matrix,
+    /// Jᵀ in joint space, m × n.
+    pub joint_jacobian_transpose: Matrix,
+    /// Joint names (empty when unknown).
+    pub joint_names: Vec<String>,
+    /// Q₂ᵀ, k × m: orthonormal joint-torque directions outside the range of T.
+    pub unactuated_directions: Matrix,
+}
+
+impl ActuatorSpace {
+    /// Joints m.
+    pub fn joints(&self) -> usize {
+        self.transmission.nrows()
+    }
+
+    /// `τ = T u` into `out` (length m).
+    pub fn joint_torques_into(&self, u: &[f64], out: &mut [f64]) {
+        self.transmission.mul_vec_into(u, out);
+    }
+
+    /// The unactuated directions as joint combinations, for messages:
+    /// `0.71·FFJ0 − 0.71·FFJ1` (terms below 1e-3 of the largest left out).
+    pub fn describe_unactuated(&self) -> Vec<String> {
+        let q = &self.unactuated_directions;
+        (0..q.nrows())
+            .map(|i| {
+                let row = q.row(i);
+                let big = row.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                let mut s = String::new();
+                for (j, &v) in row.iter().enumerate() {
+                    if v.abs() <= 1e-3 * big {
+                        continue;
+                    }
+                    let name = self
+                        .joint_names
+                        .get(j)
+                        .cloned()
+                        .unwrap_or_else(|| format!("joint {j}"));
+                    let sign = if v < 0.0 { "−" } else { "+" };
+                    if s.is_empty() {
+                        if v < 0.0 {
+                            s.push('−');
+                        }
+                    } else {
+                        s.push_str(&format!(" {sign} "));
+                    }
+                    s.push_str(&format!("{:.3}·{name}", v.abs()));
+                }
+                s
+            })
+            .collect()
+    }
+}
+
+/// The decision rows `T⁺ Jᵀ`, the unactuated rows `Q₂ᵀ Jᵀ` and the joint space, or
+/// `Jᵀ` itself without a transmission (or with `T = I`).
+fn actuator_space(
+    p: &GraspProblem,
+    rank_tolerance: f64,
+) -> Result<(Matrix, Matrix, Option<ActuatorSpace>), ModelError> {
+    let n = p.force_dim();
+    let Some(t) = p.transmission.as_ref().filter(|t| !t.is_identity()) else {
+        return Ok((p.jacobian_transpose.clone(), Matrix::zeros(0, n), None));
+    };
+    let tm = &t.matrix;
+    let (m, a) = (tm.nrows(), tm.ncols());
+    let dec = decompose(tm, RankThreshold::Relative(rank_tolerance)).map_err(|_| {
+        ModelError::Decomposition {
+            what: "the transmission T",
+            rows: m,
+            cols: a,
+        }
+    })?;
+    // T has independent columns (validated), so T⁺ T = I and u = T⁺ τ.
+    let tplus = dec.pseudo_inverse();
+    let jt = tplus.matmul(&p.jacobian_transpose);
+    let q2t = dec.left_null.transpose();
+    let unactuated = q2t.matmul(&p.jacobian_transpose);
+    Ok((
+        jt,
+        unactuated,
+        Some(ActuatorSpace {
+            transmission: tm.clone(),
+            joint_jacobian_transpose: p.jacobian_transpose.clone(),
+            joint_names: p.joint_names.clone(),
+            unactuated_directions: q2t,
+        }),
+    ))
 }
 
 impl GraspModel {
@@ -164,15 +267,21 @@ impl GraspModel {
         if !(opts.rank_tolerance > 0.0 && opts.rank_tolerance < 1.0) {
             return Err(ModelError::RankTolerance(opts.rank_tolerance));
         }
-        let (n, m) = (p.force_dim(), p.joints());
-        // Row i of A = [G; Jᵀ], without stacking a copy.
+        let n = p.force_dim();
+        let (jt, unactuated, actuators) = actuator_space(p, opts.rank_tolerance)?;
+        let (k, m) = (unactuated.nrows(), jt.nrows());
+        // Row i of A = [G; E; Jᵀ] (E: the unactuated directions, target 0), without
+        // stacking a copy.
         let a_row = |i: usize| {
             if i < 6 {
                 p.grasp_matrix.row(i)
+            } else if i < 6 + k {
+                unactuated.row(i - 6)
             } else {
-                p.jacobian_transpose.row(i - 6)
+                jt.row(i - 6 - k)
             }
         };
+        let rows = 6 + k + m;
         // Column metric D: mz counts as mz/mu_torsion in the compliance metric.
         let mut force_unit = vec![1.0; n];
         let mut offsets = Vec::with_capacity(p.contacts.len());
@@ -198,7 +307,7 @@ impl GraspModel {
         let equilibrate = opts.equilibrium == Equilibrium::Consistent
             && p.internal_forces != InternalForces::Euclidean;
         let mut scaled = vec![0.0; n];
-        let r: Vec<f64> = (0..6 + m)
+        let r: Vec<f64> = (0..rows)
             .map(|i| {
                 for ((s, x), d) in scaled.iter_mut().zip(a_row(i)).zip(&dinv) {
                     *s = x * d;
@@ -212,19 +321,20 @@ impl GraspModel {
             })
             .collect();
         // R A D⁻¹.
-        let mat = Matrix::from_fn(6 + m, n, |i, j| a_row(i)[j] * dinv[j] * r[i]);
+        let mat = Matrix::from_fn(rows, n, |i, j| a_row(i)[j] * dinv[j] * r[i]);
         let dec = decompose(&mat, RankThreshold::Relative(opts.rank_tolerance)).map_err(|_| {
             ModelError::Decomposition {
                 what: "[G; Jᵀ]",
-                rows: 6 + m,
+                rows,
                 cols: n,
             }
         })?;
         let rank = dec.rank();
         let zm = dec.pseudo_inverse();
-        // Z = D⁻¹ (R A D⁻¹)⁺ R, split into Z1 (wrench) and Z2 (torque).
+        // Z = D⁻¹ (R A D⁻¹)⁺ R, split into Z1 (wrench) and Z2 (torque); E's columns
+        // multiply its zero target.
         let z1 = Matrix::from_fn(n, 6, |i, j| dinv[i] * zm[(i, j)] * r[j]);
-        let z2 = Matrix::from_fn(n, m, |i, j| dinv[i] * zm[(i, 6 + j)] * r[6 + j]);
+        let z2 = Matrix::from_fn(n, m, |i, j| dinv[i] * zm[(i, 6 + k + j)] * r[6 + k + j]);
         let passive_basis = Matrix::from_fn(n, n - rank, |i, k| dinv[i] * dec.null_basis[(i, k)]);
         let mut wrench_scale = [1.0; 6];
         wrench_scale.copy_from_slice(&r[..6]);
@@ -236,11 +346,11 @@ impl GraspModel {
                 Matrix::zeros(0, 6),
             ),
             Equilibrium::Consistent => {
-                // U⊥ᵀ R [w; τ] = 0 with x = R_τ τ: P_τ x = −P_w R_w w.
+                // U⊥ᵀ R [w; 0; τ] = 0 with x = R_τ τ: P_τ x = −P_w R_w w.
                 let u = &dec.left_null;
                 let p0 = u.ncols();
                 let pw0 = Matrix::from_fn(p0, 6, |i, j| u[(j, i)]);
-                let pt = Matrix::from_fn(p0, m, |i, j| u[(6 + j, i)]);
+                let pt = Matrix::from_fn(p0, m, |i, j| u[(6 + k + j, i)]);
                 // One rank decision for C: independent rows only. P_τ has orthonormal
                 // origin (‖P_τ‖ ≤ 1), so the threshold is absolute.
                 let dc =
@@ -252,7 +362,7 @@ impl GraspModel {
                         }
                     })?;
                 let rc = dc.rank();
-                let eq = Matrix::from_fn(rc, m, |i, j| dc.row_basis[(j, i)] * r[6 + j]);
+                let eq = Matrix::from_fn(rc, m, |i, j| dc.row_basis[(j, i)] * r[6 + k + j]);
                 let eq_w = Matrix::from_fn(rc, 6, |i, j| {
                     r[j] * (0..p0)
                         .map(|k| dc.row_transform[(i, k)] * pw0[(k, j)])
@@ -272,15 +382,28 @@ impl GraspModel {
             .min_normal_force
             .clone()
             .unwrap_or_else(|| vec![0.0; p.contacts.len()]);
+        let joint_names = match (&actuators, &p.transmission) {
+            (_, Some(t)) if !t.actuator_names.is_empty() => t.actuator_names.clone(),
+            (Some(_), _) => (0..m).map(|j| format!("actuator {j}")).collect(),
+            _ => p.joint_names.clone(),
+        };
+        let row_reach = (0..rows)
+            .map(|i| {
+                a_row(i)
+                    .iter()
+                    .zip(&force_unit)
+                    .map(|(x, u)| (x * u).abs())
+                    .sum()
+            })
+            .collect();
         Ok(Self {
             grasp_matrix: p.grasp_matrix.clone(),
-            jacobian_transpose: p.jacobian_transpose.clone(),
             contacts: p.contacts.clone(),
             offsets,
             weights: p.torque_weights.clone().unwrap_or_else(|| vec![1.0; m]),
             torque_limits: p.torque_limits.clone().unwrap_or_else(|| vec![None; m]),
             min_normal_force,
-            joint_names: p.joint_names.clone(),
+            joint_names,
             internal_forces: p.internal_forces,
             equilibrium: opts.equilibrium,
             rank_tolerance: opts.rank_tolerance,
@@ -292,16 +415,12 @@ impl GraspModel {
             eq_w,
             unreachable,
             wrench_scale,
-            torque_scale: r[6..].to_vec(),
-            row_reach: (0..6 + m)
-                .map(|i| {
-                    a_row(i)
-                        .iter()
-                        .zip(&force_unit)
-                        .map(|(x, u)| (x * u).abs())
-                        .sum()
-                })
-                .collect(),
+            unactuated_scale: r[6..6 + k].to_vec(),
+            torque_scale: r[6 + k..].to_vec(),
+            row_reach,
+            jacobian_transpose: jt,
+            unactuated,
+            actuators,
             force_unit_inv: force_unit.iter().map(|u| 1.0 / u).collect(),
             force_unit,
         })
@@ -315,6 +434,11 @@ impl GraspModel {
     /// Number of contact force components n.
     pub fn force_dim(&self) -> usize {
         self.grasp_matrix.ncols()
+    }
+
+    /// Index of torque row j in the rows of `[G; E; Jᵀ]` (for [`Self::row_reach`]).
+    pub fn torque_row(&self, j: usize) -> usize {
+        6 + self.unactuated.nrows() + j
     }
 
     /// Number of consistency equalities p.

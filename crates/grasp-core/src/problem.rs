@@ -65,6 +65,42 @@ pub struct GraspProblem {
     pub joint_names: Vec<String>,
     /// How the passive internal forces (the null space of `[G; Jᵀ]`) are fixed.
     pub internal_forces: InternalForces,
+    /// Actuators that drive the joints (`τ = T u`); `None` means one per joint
+    /// (`T = I`). With it, the weights, limits and initial torque are per actuator.
+    pub transmission: Option<Transmission>,
+}
+
+/// How actuator forces u become joint torques: `τ = T u`.
+///
+/// T is MuJoCo's actuator moment arm, transposed: the gear for an actuator on a joint,
+/// the gear times the tendon coefficients for one on a fixed tendon. Its columns must be
+/// linearly independent. With fewer actuators than joints the hand is underactuated,
+/// and `Jᵀ f` must lie in the range of T.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Transmission {
+    /// T, joints × actuators.
+    pub matrix: Matrix,
+    /// One name per actuator (column of T), or empty.
+    pub actuator_names: Vec<String>,
+}
+
+impl Transmission {
+    /// Whether T is exactly the identity: the problem is then the same as without it.
+    pub fn is_identity(&self) -> bool {
+        let t = &self.matrix;
+        t.nrows() == t.ncols()
+            && (0..t.nrows()).all(|i| {
+                t.row(i)
+                    .iter()
+                    .enumerate()
+                    .all(|(j, &v)| v == if i == j { 1.0 } else { 0.0 })
+            })
+    }
+
+    /// Number of actuators a.
+    pub fn actuators(&self) -> usize {
+        self.matrix.ncols()
+    }
 }
 
 impl GraspProblem {
@@ -87,6 +123,7 @@ impl GraspProblem {
             initial_torque: None,
             joint_names: Vec::new(),
             internal_forces: InternalForces::default(),
+            transmission: None,
         }
     }
 
@@ -101,6 +138,27 @@ impl GraspProblem {
     /// Number of joints m.
     pub fn joints(&self) -> usize {
         self.jacobian_transpose.nrows()
+    }
+
+    /// Number of torques the solver chooses: the actuators a with a transmission, else
+    /// the joints m.
+    pub fn actuated(&self) -> usize {
+        self.transmission
+            .as_ref()
+            .map_or(self.joints(), Transmission::actuators)
+    }
+
+    /// The name of torque variable `j`: an actuator's name with a transmission, else a
+    /// joint's.
+    pub fn actuator_name(&self, j: usize) -> String {
+        match &self.transmission {
+            Some(t) => t
+                .actuator_names
+                .get(j)
+                .cloned()
+                .unwrap_or_else(|| format!("actuator {j}")),
+            None => self.joint_name(j),
+        }
     }
 
     /// Number of contact force components n.
@@ -159,6 +217,9 @@ impl GraspProblem {
                 format!("{} names", self.joint_names.len()),
             ));
         }
+        if let Some(t) = &self.transmission {
+            validate_transmission(t, m)?;
+        }
         bounded_matrix("grasp_matrix", g)?;
         for (i, c) in self.contacts.iter().enumerate() {
             c.validate().map_err(|e| {
@@ -211,8 +272,13 @@ impl GraspProblem {
                 ),
             ));
         }
+        // Weights, limits and the initial torque are per actuator with a transmission.
+        let (m, per) = match &self.transmission {
+            Some(t) => (t.actuators(), "actuator (columns of transmission)"),
+            None => (m, "joint (rows of jacobian_transpose)"),
+        };
         if let Some(w) = &self.torque_weights {
-            per_joint("torque_weights", w.len(), m)?;
+            per_joint("torque_weights", w.len(), m, per)?;
             for (j, &v) in w.iter().enumerate() {
                 if !(WEIGHT_RANGE.0..=WEIGHT_RANGE.1).contains(&v) {
                     return Err(ProblemError::invalid(
@@ -239,7 +305,7 @@ impl GraspProblem {
             }
         }
         if let Some(l) = &self.torque_limits {
-            per_joint("torque_limits", l.len(), m)?;
+            per_joint("torque_limits", l.len(), m, per)?;
             for (j, v) in l.iter().enumerate() {
                 if let Some(v) = *v {
                     if !(v > 0.0 && v <= MAX_MAGNITUDE) {
@@ -273,7 +339,7 @@ impl GraspProblem {
             }
         }
         if let Some(t) = &self.initial_torque {
-            per_joint("initial_torque", t.len(), m)?;
+            per_joint("initial_torque", t.len(), m, per)?;
             for (j, v) in t.iter().enumerate() {
                 if !v.is_finite() {
                     return Err(ProblemError::invalid(
@@ -333,14 +399,75 @@ fn bounded_matrix(name: &str, a: &Matrix) -> Result<(), ProblemError> {
     Ok(())
 }
 
-fn per_joint(name: &str, len: usize, m: usize) -> Result<(), ProblemError> {
+fn per_joint(name: &str, len: usize, m: usize, per: &str) -> Result<(), ProblemError> {
     if len == m {
         Ok(())
     } else {
         Err(ProblemError::invalid(
             name,
-            format!("one value per joint ({m}, the rows of jacobian_transpose)"),
+            format!("one value per {per}: {m}"),
             format!("{len} values"),
         ))
     }
 }
+
+/// Shape, magnitudes, names and independent columns of T.
+fn validate_transmission(t: &Transmission, m: usize) -> Result<(), ProblemError> {
+    let a = t.matrix.ncols();
+    if t.matrix.nrows() != m {
+        return Err(ProblemError::invalid(
+            "transmission",
+            format!("{m} rows, one per joint (the rows of jacobian_transpose)"),
+            format!("{} rows", t.matrix.nrows()),
+        ));
+    }
+    if a == 0 || a > m {
+        return Err(ProblemError::invalid(
+            "transmission",
+            format!("1 to {m} columns (actuators; more actuators than joints cannot have independent columns)"),
+            format!("{a} columns"),
+        ));
+    }
+    if !t.actuator_names.is_empty() && t.actuator_names.len() != a {
+        return Err(ProblemError::invalid(
+            "actuator_names",
+            format!("{a} names, one per column of transmission"),
+            format!("{} names", t.actuator_names.len()),
+        ));
+    }
+    bounded_matrix("transmission", &t.matrix)?;
+    for j in 0..a {
+        if (0..m).all(|i| t.matrix[(i, j)] == 0.0) {
+            return Err(ProblemError::invalid(
+                format!("transmission[..][{j}]"),
+                "a column that drives at least one joint",
+                "all zeros",
+            ));
+        }
+    }
+    // Columns at unit length: an actuator's gear or tendon radius is not a reason to
+    // call it dependent.
+    let norms: Vec<f64> = (0..a)
+        .map(|j| (0..m).map(|i| t.matrix[(i, j)].powi(2)).sum::<f64>().sqrt())
+        .collect();
+    let unit = Matrix::from_fn(m, a, |i, j| t.matrix[(i, j)] / norms[j]);
+    let s = crate::linalg::svd(&unit).map_err(|_| {
+        ProblemError::invalid(
+            "transmission",
+            "finite entries",
+            "an SVD that did not converge",
+        )
+    })?;
+    let rank = s.rank(TRANSMISSION_RANK_TOLERANCE);
+    if rank < a {
+        return Err(ProblemError::invalid(
+            "transmission",
+            format!("linearly independent columns (rank {a}): two actuator combinations drive the same joint torques, so u is not unique"),
+            format!("rank {rank}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Relative singular value below which T's columns count as dependent.
+pub const TRANSMISSION_RANK_TOLERANCE: f64 = 1e-9;

@@ -465,18 +465,18 @@ impl ForceSpaceQp {
                 }
             }
         }
-        // G f = w with independent rows: row_basisᵀ f = row_transform · w.
-        let g = &model.grasp_matrix;
-        let d = decompose(g, RankThreshold::Relative(model.rank_tolerance)).map_err(|_| {
+        // [G; E] f = [w; 0] with independent rows: row_basisᵀ f = row_transform · [w; 0].
+        let g = model.grasp_matrix.vstack(&model.unactuated);
+        let d = decompose(&g, RankThreshold::Relative(model.rank_tolerance)).map_err(|_| {
             ModelError::Decomposition {
-                what: "G",
-                rows: 6,
+                what: "[G; E]",
+                rows: g.nrows(),
                 cols: n,
             }
         })?;
         let eq = d.row_basis.transpose();
         let eq_w = Matrix::from_fn(d.rank(), 6, |i, j| -d.row_transform[(i, j)]);
-        let unreachable = d.left_null.transpose();
+        let unreachable = Matrix::from_fn(d.left_null.ncols(), 6, |i, j| d.left_null[(j, i)]);
         let h = Matrix::from_rows(&h_rows, n);
         Ok(Self {
             hw: Matrix::zeros(h.nrows(), 6),

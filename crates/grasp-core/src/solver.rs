@@ -92,6 +92,14 @@ pub enum Reason {
         /// The relative tolerance that applied.
         tolerance: f64,
     },
+    /// Infeasible for `cause`, on a hand whose joint torques must stay in the range of
+    /// its transmission: the directions no actuator produces are named.
+    Underactuated {
+        /// The unactuated joint-torque directions, as joint combinations.
+        unactuated: Vec<String>,
+        /// What the solver found.
+        cause: Box<Reason>,
+    },
     /// Backend-specific explanation.
     Backend {
         /// The backend's name.
@@ -123,6 +131,11 @@ impl fmt::Display for Reason {
             Reason::ResidualCheck { wrench_residual, torque_residual, violation, tolerance } => write!(
                 f,
                 "the backend's answer failed the residual check at relative tolerance {tolerance:.1e}: ‖G f − w‖∞ = {wrench_residual:.3e}, ‖Jᵀ f − τ‖∞ = {torque_residual:.3e}, largest constraint violation {violation:.3e}"
+            ),
+            Reason::Underactuated { unactuated, cause } => write!(
+                f,
+                "{cause}; the hand is underactuated: Jᵀ f must lie in the range of the transmission, and no actuator produces joint torque along {}",
+                unactuated.join("; ")
             ),
             Reason::Backend { backend, message } => write!(f, "{backend}: {message}"),
         }
@@ -195,8 +208,11 @@ pub struct Solution {
     #[serde(serialize_with = "reason_with_message")]
     pub reason: Option<Reason>,
     /// τ, one per joint (empty unless the status has an answer, or an iteration limit
-    /// with a feasible iterate).
+    /// with a feasible iterate). With a transmission: u, one per actuator.
     pub torque: Vec<f64>,
+    /// With a transmission, the joint torques `τ = T u` (empty otherwise).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub joint_torque: Vec<f64>,
     /// The passive internal forces ξ chosen (empty unless they are free).
     pub internal_forces: Vec<f64>,
     /// `f = Z1 w + Z2 τ + N ξ`, in contact order (empty when `torque` is).
@@ -353,7 +369,18 @@ pub fn solve_into(
     out.solve_time = start.elapsed();
     let tol = solver.residual_tolerance();
     let name = solver.name();
-    solver.problem().complete(wrench, tol, name, out);
+    let qp = solver.problem();
+    qp.complete(wrench, tol, name, out);
+    if let Some(a) = &qp.model.actuators {
+        if out.status == Status::Infeasible && a.unactuated_directions.nrows() > 0 {
+            if let Some(cause) = out.reason.take() {
+                out.reason = Some(Reason::Underactuated {
+                    unactuated: a.describe_unactuated(),
+                    cause: Box::new(cause),
+                });
+            }
+        }
+    }
     Ok(())
 }
 
@@ -412,6 +439,7 @@ impl TorqueQp {
         d.check_tolerance = tol;
         if out.torque.is_empty() {
             out.contact_forces.clear();
+            out.joint_torque.clear();
             out.objective = 0.0;
             d.wrench_residual = 0.0;
             d.torque_residual = 0.0;
@@ -465,7 +493,8 @@ impl TorqueQp {
             let r = (dot(row, f) - t).abs();
             tres = tres.max(r);
             let rj = model.torque_scale[j];
-            let mut bound = tol * (t.abs() + model.row_reach[6 + j] * fmax) * rj + admitted;
+            let mut bound =
+                tol * (t.abs() + model.row_reach[model.torque_row(j)] * fmax) * rj + admitted;
             if exceeds(r * rj, bound) {
                 bound += rounding * model.force_terms_dot(row, w, tau, &out.internal_forces) * rj;
                 tbad |= exceeds(r * rj, bound);
@@ -473,6 +502,52 @@ impl TorqueQp {
             if r > 0.0 {
                 tratio = tratio.max(r * rj / bound);
             }
+        }
+        // E f = 0: the joint torques stay in the range of the transmission.
+        for i in 0..model.unactuated.nrows() {
+            let row = model.unactuated.row(i);
+            let r = dot(row, f).abs();
+            tres = tres.max(r);
+            let ri = model.unactuated_scale[i];
+            let mut bound = tol * model.row_reach[6 + i] * fmax * ri + admitted;
+            if exceeds(r * ri, bound) {
+                bound += rounding * model.force_terms_dot(row, w, tau, &out.internal_forces) * ri;
+                tbad |= exceeds(r * ri, bound);
+            }
+            if r > 0.0 {
+                tratio = tratio.max(r * ri / bound);
+            }
+        }
+        match &model.actuators {
+            Some(a) => {
+                out.joint_torque.resize(a.joints(), 0.0);
+                a.joint_torques_into(tau, &mut out.joint_torque);
+                // The user's equation, in joint space: Jᵀ f = T u, each row against its
+                // own terms (the rows above are its image under T⁺ and Q₂ᵀ).
+                for (i, t) in out.joint_torque.iter().enumerate() {
+                    let row = a.joint_jacobian_transpose.row(i);
+                    let (mut v, mut size) = (-t, 0.0);
+                    for ((x, fj), unit) in row.iter().zip(f).zip(&model.force_unit) {
+                        v += x * fj;
+                        size += (x * unit).abs() * fmax;
+                    }
+                    size += a
+                        .transmission
+                        .row(i)
+                        .iter()
+                        .zip(tau)
+                        .map(|(x, u)| (x * u).abs())
+                        .sum::<f64>();
+                    let r = v.abs();
+                    tres = tres.max(r);
+                    let bound = (tol + rounding) * size;
+                    tbad |= exceeds(r, bound);
+                    if r > 0.0 {
+                        tratio = tratio.max(r / bound.max(f64::MIN_POSITIVE));
+                    }
+                }
+            }
+            None => out.joint_torque.clear(),
         }
         d.wrench_residual = wres;
         d.torque_residual = tres;
