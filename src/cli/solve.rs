@@ -126,12 +126,29 @@ pub(crate) fn to_json(
             json!(null)
         },
     );
-    o.insert(
-        "joint_names".into(),
-        json!((0..model.joints())
-            .map(|j| model.joint_name(j))
-            .collect::<Vec<_>>()),
-    );
+    let names: Vec<String> = (0..model.joints()).map(|j| model.joint_name(j)).collect();
+    match &model.actuators {
+        // `torque` holds u, one per actuator; `joint_torque` τ = T u, one per joint.
+        Some(a) => {
+            o.insert("actuator_names".into(), json!(names));
+            o.insert(
+                "joint_names".into(),
+                json!((0..a.joints())
+                    .map(|j| a
+                        .joint_names
+                        .get(j)
+                        .cloned()
+                        .unwrap_or_else(|| format!("joint {j}")))
+                    .collect::<Vec<_>>()),
+            );
+            if !ok {
+                o.insert("joint_torque".into(), json!(null));
+            }
+        }
+        None => {
+            o.insert("joint_names".into(), json!(names));
+        }
+    }
     o.insert(
         "contact_models".into(),
         json!(qp
@@ -236,7 +253,15 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
         return o;
     }
     let _ = writeln!(o, "objective σ = Σ w τ² = {}", g(s.objective, 10));
-    let _ = writeln!(o, "\njoint torques");
+    let _ = writeln!(
+        o,
+        "\n{}",
+        if model.actuators.is_some() {
+            "actuator forces u"
+        } else {
+            "joint torques"
+        }
+    );
     let names: Vec<String> = (0..model.joints()).map(|j| model.joint_name(j)).collect();
     let width = names.iter().map(|n| n.chars().count()).max().unwrap_or(0);
     // Torques below the check's tolerance of the largest are rounding: shown as 0.
@@ -261,6 +286,28 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
             _ => String::new(),
         };
         let _ = writeln!(o, "  {n:<width$}  {shown:>13}{limit}");
+    }
+    if let Some(a) = &model.actuators {
+        let _ = writeln!(o, "\njoint torques τ = T u");
+        let names: Vec<String> = (0..a.joints())
+            .map(|j| {
+                a.joint_names
+                    .get(j)
+                    .cloned()
+                    .unwrap_or_else(|| format!("joint {j}"))
+            })
+            .collect();
+        let width = names.iter().map(|n| n.chars().count()).max().unwrap_or(0);
+        let tmax = s.joint_torque.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let tzero = s.diagnostics.check_tolerance * tmax;
+        for (n, t) in names.iter().zip(&s.joint_torque) {
+            let shown = if t.abs() <= tzero {
+                "0".into()
+            } else {
+                g(*t, 7)
+            };
+            let _ = writeln!(o, "  {n:<width$}  {shown:>13}");
+        }
     }
     // Components below the check's tolerance of the largest force are rounding.
     let fmax = s

@@ -192,6 +192,13 @@ pub struct MatrixFile {
     /// One name per row of `jacobian_transpose`, echoed in reports.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joint_names: Option<Vec<String>>,
+    /// T, joints × actuators: `τ = T u`. With it the solver chooses the actuator
+    /// forces u, and the weights, limits and initial torque are per actuator.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transmission: Option<Vec<Vec<f64>>>,
+    /// One name per column of `transmission`, echoed in reports.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub actuator_names: Option<Vec<String>>,
 }
 
 impl MatrixFile {
@@ -211,6 +218,12 @@ impl MatrixFile {
             initial_torque: p.initial_torque.clone(),
             internal_forces: Some(p.internal_forces),
             joint_names: (!p.joint_names.is_empty()).then(|| p.joint_names.clone()),
+            transmission: p.transmission.as_ref().map(|t| t.matrix.to_rows()),
+            actuator_names: p
+                .transmission
+                .as_ref()
+                .filter(|t| !t.actuator_names.is_empty())
+                .map(|t| t.actuator_names.clone()),
         }
     }
 
@@ -227,6 +240,20 @@ impl MatrixFile {
             .collect::<Result<Vec<_>, _>>()?;
         let mut p = GraspProblem::new(g, jt, wrench, contacts);
         p.joint_names = self.joint_names.unwrap_or_default();
+        p.transmission = match (self.transmission, self.actuator_names) {
+            (Some(t), names) => Some(grasp_core::problem::Transmission {
+                matrix: rectangular("transmission", &t)?,
+                actuator_names: names.unwrap_or_default(),
+            }),
+            (None, Some(_)) => {
+                return Err(ProblemError::invalid(
+                    "actuator_names",
+                    "a transmission to name the columns of",
+                    "actuator_names without transmission",
+                ))
+            }
+            (None, None) => None,
+        };
         Options {
             linearization: self.linearization,
             torque_weights: self.torque_weights,

@@ -75,12 +75,20 @@ pub struct HandContact {
     /// Optional name, used in messages.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
-    /// The link that touches: every moving joint from the root to it moves the contact.
-    pub link: String,
-    /// Contact point.
-    pub position: [f64; 3],
-    /// Unit normal, pointing into the object.
-    pub normal: [f64; 3],
+    /// The link (an MJCF body) that touches: every moving joint from the root to it
+    /// moves the contact. Give either `link` with `position`, or `site`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub link: Option<String>,
+    /// An MJCF site: the contact point is its origin, on its body, and its z axis is
+    /// the normal unless `normal` is given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub site: Option<String>,
+    /// Contact point (with `link`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f64; 3]>,
+    /// Unit normal, pointing into the object (optional with `site`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal: Option<[f64; 3]>,
     /// `object` (default) or `link`: the frame of `position` and `normal`.
     #[serde(default)]
     pub frame: ContactFrame,
@@ -149,8 +157,23 @@ pub struct HandReport {
     /// the model: they are unlimited.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub unlimited_joints: Vec<String>,
+    /// Per actuator of an MJCF hand: its force limit and where it comes from
+    /// (`forcerange`, `ctrlrange` × gain, or `none`), whether or not limits are used.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub actuator_limits: Vec<ActuatorLimit>,
     /// What was loaded but ignored, or looks wrong (one line each).
     pub warnings: Vec<String>,
+}
+
+/// An actuator's force limit in a report.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ActuatorLimit {
+    /// The actuator.
+    pub actuator: String,
+    /// `|u| ≤ limit`, in the actuator's force unit (N or N·m times its gear's unit).
+    pub limit: Option<f64>,
+    /// Where it comes from.
+    pub source: crate::urdf::LimitSource,
 }
 
 /// A hand-form problem, built.
@@ -288,33 +311,97 @@ impl HandFile {
         let mut used = vec![false; robot.independent.len()];
         for (i, c) in self.contacts.iter().enumerate() {
             let at = || label(i, &c.name);
-            let link = robot.link(&c.link).ok_or_else(|| {
-                ProblemError::invalid(
-                    format!("{}.link", at()),
-                    format!(
-                        "a link of {} ({})",
-                        robot.source,
-                        nearest(&c.link, robot.links.iter().map(String::as_str))
-                    ),
-                    format!("`{}`", c.link),
-                )
-            })?;
-            check_vec(|| format!("{}.position", at()), c.position, false)?;
-            check_vec(|| format!("{}.normal", at()), c.normal, true)?;
             let model = crate::file::ContactSpec {
                 model: c.model,
                 mu: c.mu,
                 mu_torsion: c.mu_torsion,
             }
             .to_model_named(at)?;
-            let (p, n) = match c.frame {
-                ContactFrame::Object => (Vector3::from(c.position), Vector3::from(c.normal)),
-                ContactFrame::Link => {
-                    let to = to_object * frames.links[link];
-                    (
-                        (to * Point3::from(c.position)).coords,
-                        to.rotation * Vector3::from(c.normal),
-                    )
+            if let Some(n) = c.normal {
+                check_vec(|| format!("{}.normal", at()), n, true)?;
+            }
+            let (link, p, n) = match (&c.link, &c.site) {
+                (Some(name), None) => {
+                    let link = robot.link(name).ok_or_else(|| {
+                        ProblemError::invalid(
+                            format!("{}.link", at()),
+                            format!(
+                                "a link of {} ({})",
+                                robot.source,
+                                nearest(name, robot.links.iter().map(String::as_str))
+                            ),
+                            format!("`{name}`"),
+                        )
+                    })?;
+                    let position = c.position.ok_or_else(|| {
+                        ProblemError::invalid(
+                            format!("{}.position", at()),
+                            "the contact point [x, y, z] (required with link)",
+                            "missing",
+                        )
+                    })?;
+                    check_vec(|| format!("{}.position", at()), position, false)?;
+                    let normal = c.normal.ok_or_else(|| {
+                        ProblemError::invalid(
+                            format!("{}.normal", at()),
+                            "the unit normal [x, y, z] (required with link)",
+                            "missing",
+                        )
+                    })?;
+                    let (p, n) = match c.frame {
+                        ContactFrame::Object => (Vector3::from(position), Vector3::from(normal)),
+                        ContactFrame::Link => {
+                            let to = to_object * frames.links[link];
+                            (
+                                (to * Point3::from(position)).coords,
+                                to.rotation * Vector3::from(normal),
+                            )
+                        }
+                    };
+                    (link, p, n)
+                }
+                (None, Some(name)) => {
+                    let site = robot
+                        .sites
+                        .iter()
+                        .find(|s| &s.name == name)
+                        .ok_or_else(|| {
+                            ProblemError::invalid(
+                                format!("{}.site", at()),
+                                format!(
+                                    "a site of {} ({})",
+                                    robot.source,
+                                    nearest(name, robot.sites.iter().map(|s| s.name.as_str()))
+                                ),
+                                format!("`{name}`"),
+                            )
+                        })?;
+                    if c.position.is_some() {
+                        return Err(ProblemError::invalid(
+                            format!("{}.position", at()),
+                            "no position with site (the contact point is the site's origin)",
+                            "a position",
+                        ));
+                    }
+                    let to = to_object * frames.links[site.link];
+                    let frame = to * site.frame;
+                    let n = match (c.normal, c.frame) {
+                        (None, _) => frame.rotation * Vector3::z(),
+                        (Some(n), ContactFrame::Object) => Vector3::from(n),
+                        (Some(n), ContactFrame::Link) => to.rotation * Vector3::from(n),
+                    };
+                    (site.link, frame.translation.vector, n)
+                }
+                _ => {
+                    return Err(ProblemError::invalid(
+                        at(),
+                        "either link (with position and normal) or site",
+                        if c.link.is_some() {
+                            "both link and site"
+                        } else {
+                            "neither link nor site"
+                        },
+                    ))
                 }
             };
             if p.iter().any(|v| v.abs() > MAX_MAGNITUDE) {
@@ -339,6 +426,41 @@ impl HandFile {
                 model,
                 chain,
             });
+        }
+        // Actuator moment arms on the independent joints (τ_ind = Pᵀ τ_full).
+        let arms: Vec<Vec<(usize, f64)>> = robot
+            .actuators
+            .iter()
+            .map(|a| {
+                let mut v: Vec<(usize, f64)> = Vec::new();
+                for &(j, m) in &a.moment {
+                    let cp = robot.coupling[j].expect("actuators drive moving joints");
+                    match v.iter_mut().find(|(k, _)| *k == cp.independent) {
+                        Some(e) => e.1 += cp.multiplier * m,
+                        None => v.push((cp.independent, cp.multiplier * m)),
+                    }
+                }
+                v.retain(|&(_, m)| m != 0.0);
+                v
+            })
+            .collect();
+        // An actuator that drives a contact's joint also loads its other joints, which
+        // must then be balanced too: they join the problem (with zero Jᵀ rows).
+        let mut driving = vec![false; arms.len()];
+        loop {
+            let mut grew = false;
+            for (a, arm) in arms.iter().enumerate() {
+                if !driving[a] && arm.iter().any(|&(k, _)| used[k]) {
+                    driving[a] = true;
+                    for &(k, _) in arm {
+                        grew |= !used[k];
+                        used[k] = true;
+                    }
+                }
+            }
+            if !grew {
+                break;
+            }
         }
         let rows: Vec<usize> = (0..robot.independent.len()).filter(|&k| used[k]).collect();
         if rows.is_empty() {
@@ -413,9 +535,64 @@ impl HandFile {
         let name_of = |k: usize| robot.joints[robot.independent[k]].name.clone();
         p.joint_names = rows.iter().map(|&k| name_of(k)).collect();
 
+        let columns: Vec<usize> = (0..arms.len()).filter(|&a| driving[a]).collect();
+        if !robot.actuators.is_empty() {
+            if columns.is_empty() {
+                return Err(ProblemError::invalid(
+                    "contacts",
+                    format!(
+                        "contacts on links that an actuator of {} moves",
+                        robot.source
+                    ),
+                    "no actuator drives a joint that moves a contact",
+                ));
+            }
+            if columns.len() > rows.len() {
+                let names: Vec<&str> = columns
+                    .iter()
+                    .map(|&a| robot.actuators[a].name.as_str())
+                    .collect();
+                return Err(ProblemError::invalid(
+                    "hand.model",
+                    format!(
+                        "at most as many actuators as joints on the contacts' chains ({})",
+                        rows.len()
+                    ),
+                    format!("{} actuators: {}", columns.len(), names.join(", ")),
+                ));
+            }
+            p.transmission = Some(grasp_core::problem::Transmission {
+                matrix: Matrix::from_fn(rows.len(), columns.len(), |r, c| {
+                    arms[columns[c]]
+                        .iter()
+                        .find(|&&(k, _)| k == rows[r])
+                        .map_or(0.0, |&(_, m)| m)
+                }),
+                actuator_names: columns
+                    .iter()
+                    .map(|&a| robot.actuators[a].name.clone())
+                    .collect(),
+            });
+        }
         let mut unlimited_joints = Vec::new();
         let (torque_limits, limits_from) = match &self.torque_limits {
             None | Some(serde_json::Value::Null) => (None, "none"),
+            Some(serde_json::Value::String(s)) if s == "model" && !columns.is_empty() => {
+                let limits: Vec<Option<f64>> = columns.iter().map(|&a| robot.actuators[a].limit).collect();
+                for &a in &columns {
+                    let act = &robot.actuators[a];
+                    if act.limit.is_none() {
+                        unlimited_joints.push(act.name.clone());
+                    }
+                }
+                if !unlimited_joints.is_empty() {
+                    warnings.push(format!(
+                        "torque_limits \"model\": no forcerange, and no ctrlrange of a force actuator, for {}; unlimited",
+                        unlimited_joints.join(", ")
+                    ));
+                }
+                (Some(limits), "model")
+            }
             Some(serde_json::Value::String(s)) if s == "model" => {
                 let limits: Vec<Option<f64>> = rows
                     .iter()
@@ -475,6 +652,17 @@ impl HandFile {
                 defaulted_joints,
                 torque_limits: limits_from,
                 unlimited_joints,
+                actuator_limits: columns
+                    .iter()
+                    .map(|&a| {
+                        let act = &robot.actuators[a];
+                        ActuatorLimit {
+                            actuator: act.name.clone(),
+                            limit: act.limit,
+                            source: act.limit_source,
+                        }
+                    })
+                    .collect(),
                 warnings,
             },
         })

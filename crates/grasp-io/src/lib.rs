@@ -8,6 +8,7 @@
 pub mod file;
 pub mod geometry;
 pub mod hand;
+pub mod mjcf;
 pub mod urdf;
 
 pub use file::{

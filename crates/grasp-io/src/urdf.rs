@@ -131,11 +131,59 @@ pub struct Robot {
     /// What was loaded but ignored, one line each (malformed or duplicated inertial
     /// data, an effort of zero).
     pub warnings: Vec<String>,
+    /// Named frames on links (MJCF `<site>`; none in a URDF).
+    pub sites: Vec<Site>,
+    /// Actuators (MJCF `<actuator>`; none in a URDF, whose joints are driven one to
+    /// one).
+    pub actuators: Vec<Actuator>,
     /// Per link: the joint whose child it is (`None` for the root).
     parent_joint: Vec<Option<usize>>,
     /// Links from the root outwards: every parent comes before its children.
     order: Vec<usize>,
     link_lines: Vec<u32>,
+}
+
+/// A named frame fixed to a link (an MJCF `<site>`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Site {
+    /// Its name.
+    pub name: String,
+    /// The link it is on.
+    pub link: usize,
+    /// Its frame in the link's frame; its z axis is a contact's default normal.
+    pub frame: Isometry3<f64>,
+    /// Line of the element.
+    pub line: u32,
+}
+
+/// Where an actuator's force limit comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LimitSource {
+    /// `forcerange` (force-limited).
+    Forcerange,
+    /// `ctrlrange` times the gain of an actuator whose force is gain × ctrl.
+    Ctrlrange,
+    /// Neither applies: unlimited.
+    None,
+}
+
+/// One actuator: how its force u moves the joints.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Actuator {
+    /// Its name.
+    pub name: String,
+    /// The MJCF element (`motor`, `general`, `position`, …).
+    pub kind: String,
+    /// Moment arms on the joints (index into [`Robot::joints`], value): the gear on a
+    /// joint, the gear times the tendon coefficients on a fixed tendon.
+    pub moment: Vec<(usize, f64)>,
+    /// `|u| ≤ limit`.
+    pub limit: Option<f64>,
+    /// Where the limit comes from.
+    pub limit_source: LimitSource,
+    /// Line of the element.
+    pub line: u32,
 }
 
 /// The frames of every link and joint at one configuration, in the root link's frame.
@@ -451,8 +499,12 @@ fn malformed_inertial(e: roxmltree::Node) -> Option<String> {
 
 impl Robot {
     /// Reads and checks a URDF file (at most [`crate::file::MAX_FILE_BYTES`]).
+    /// An MJCF file (root element `<mujoco>`) is read by [`Robot::load_mjcf`].
     pub fn load(path: &Path) -> Result<Self, ProblemError> {
         let text = crate::file::read_limited(path)?;
+        if is_mjcf(&text) {
+            return Self::parse_mjcf(&text, &path.display().to_string(), path.parent());
+        }
         Self::parse(&text, &path.display().to_string())
     }
 
@@ -697,60 +749,8 @@ impl Robot {
                 "is on a cycle of joints: it cannot be reached from the root link",
             ));
         }
-        // Mimic chains resolved to independent joints.
-        let independent: Vec<usize> = (0..joints.len())
-            .filter(|&j| joints[j].kind != JointKind::Fixed && joints[j].mimic.is_none())
-            .collect();
-        let mut coupling: Vec<Option<Coupling>> = vec![None; joints.len()];
-        for (k, &j) in independent.iter().enumerate() {
-            coupling[j] = Some(Coupling {
-                independent: k,
-                multiplier: 1.0,
-                offset: 0.0,
-            });
-        }
-        for j in 0..joints.len() {
-            if joints[j].kind == JointKind::Fixed {
-                if joints[j].mimic.is_some() {
-                    warnings.push(format!(
-                        "{file}: {}: a fixed joint with <mimic>; the mimic is ignored",
-                        joint_at(&joints[j].name)
-                    ));
-                }
-                continue;
-            }
-            let (mut at, mut mult, mut off, mut steps) = (j, 1.0, 0.0, 0);
-            while let Some(m) = joints[at].mimic {
-                if joints[m.leader].kind == JointKind::Fixed {
-                    return Err(robot_error(
-                        file,
-                        joint_at(&joints[at].name),
-                        format!(
-                            "<mimic joint=\"{}\">: that joint is fixed",
-                            joints[m.leader].name
-                        ),
-                    ));
-                }
-                // q_at = m q_leader + o, so q_j = mult q_at + off = mult m q_leader + (mult o + off).
-                off += mult * m.offset;
-                mult *= m.multiplier;
-                at = m.leader;
-                steps += 1;
-                if steps > joints.len() {
-                    return Err(robot_error(
-                        file,
-                        joint_at(&joints[j].name),
-                        "its <mimic> chain comes back to itself (a cycle of mimic joints)",
-                    ));
-                }
-            }
-            let base = coupling[at].expect("an independent joint has a coupling");
-            coupling[j] = Some(Coupling {
-                independent: base.independent,
-                multiplier: mult,
-                offset: off,
-            });
-        }
+        let (independent, coupling) =
+            resolve_couplings(&joints, file, &mut warnings, |n| joint_at(n))?;
         let link_lines = links.iter().map(|n| link_line(n)).collect();
         Ok(Self {
             name: parsed.name,
@@ -764,6 +764,60 @@ impl Robot {
             parent_joint,
             order,
             link_lines,
+            sites: Vec::new(),
+            actuators: Vec::new(),
+        })
+    }
+
+    /// A tree built by another reader (MJCF): link 0 is the root, every other link is
+    /// one joint's child, and mimic couplings and positions are measured from each
+    /// joint's `reference` (joint motion is `q − reference`).
+    pub(crate) fn from_tree(
+        name: String,
+        source: String,
+        links: Vec<String>,
+        link_lines: Vec<u32>,
+        joints: Vec<Joint>,
+        reference: &[f64],
+        mut warnings: Vec<String>,
+    ) -> Result<Self, ProblemError> {
+        let mut parent_joint = vec![None; links.len()];
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); links.len()];
+        for (ji, j) in joints.iter().enumerate() {
+            parent_joint[j.child] = Some(ji);
+            children[j.parent].push(ji);
+        }
+        let mut order = Vec::with_capacity(links.len());
+        let mut stack = vec![0];
+        while let Some(l) = stack.pop() {
+            order.push(l);
+            stack.extend(children[l].iter().rev().map(|&ji| joints[ji].child));
+        }
+        let file = source.clone();
+        let (independent, mut coupling) = resolve_couplings(&joints, &file, &mut warnings, |n| {
+            format!(
+                "<joint name=\"{n}\"> (line {})",
+                joints.iter().find(|j| j.name == n).map_or(0, |j| j.line)
+            )
+        })?;
+        // Motion is measured from each joint's reference position: q − ref.
+        for c in coupling.iter_mut().flatten() {
+            c.offset -= c.multiplier * reference[independent[c.independent]];
+        }
+        Ok(Self {
+            name,
+            source,
+            links,
+            joints,
+            root: 0,
+            independent,
+            coupling,
+            warnings,
+            parent_joint,
+            order,
+            link_lines,
+            sites: Vec::new(),
+            actuators: Vec::new(),
         })
     }
 
@@ -844,6 +898,88 @@ impl Robot {
         }
         Pose { links, joints }
     }
+}
+
+/// Whether the first element of an XML text is `<mujoco>` (MJCF) rather than `<robot>`.
+fn is_mjcf(text: &str) -> bool {
+    let mut rest = text.trim_start_matches('\u{feff}');
+    loop {
+        rest = rest.trim_start();
+        if let Some(r) = rest.strip_prefix("<?") {
+            rest = r.split_once("?>").map_or("", |x| x.1);
+        } else if let Some(r) = rest.strip_prefix("<!--") {
+            rest = r.split_once("-->").map_or("", |x| x.1);
+        } else if let Some(r) = rest.strip_prefix("<!") {
+            rest = r.split_once('>').map_or("", |x| x.1);
+        } else {
+            return rest.starts_with("<mujoco");
+        }
+    }
+}
+
+/// Mimic chains resolved to independent joints: the independent joints (neither fixed
+/// nor mimic, in order) and each moving joint's coupling to one of them.
+#[allow(clippy::type_complexity)]
+fn resolve_couplings(
+    joints: &[Joint],
+    file: &str,
+    warnings: &mut Vec<String>,
+    joint_at: impl Fn(&str) -> String,
+) -> Result<(Vec<usize>, Vec<Option<Coupling>>), ProblemError> {
+    let independent: Vec<usize> = (0..joints.len())
+        .filter(|&j| joints[j].kind != JointKind::Fixed && joints[j].mimic.is_none())
+        .collect();
+    let mut coupling: Vec<Option<Coupling>> = vec![None; joints.len()];
+    for (k, &j) in independent.iter().enumerate() {
+        coupling[j] = Some(Coupling {
+            independent: k,
+            multiplier: 1.0,
+            offset: 0.0,
+        });
+    }
+    for j in 0..joints.len() {
+        if joints[j].kind == JointKind::Fixed {
+            if joints[j].mimic.is_some() {
+                warnings.push(format!(
+                    "{file}: {}: a fixed joint with <mimic>; the mimic is ignored",
+                    joint_at(&joints[j].name)
+                ));
+            }
+            continue;
+        }
+        let (mut at, mut mult, mut off, mut steps) = (j, 1.0, 0.0, 0);
+        while let Some(m) = joints[at].mimic {
+            if joints[m.leader].kind == JointKind::Fixed {
+                return Err(robot_error(
+                    file,
+                    joint_at(&joints[at].name),
+                    format!(
+                        "<mimic joint=\"{}\">: that joint is fixed",
+                        joints[m.leader].name
+                    ),
+                ));
+            }
+            // q_at = m q_leader + o, so q_j = mult q_at + off = mult m q_leader + (mult o + off).
+            off += mult * m.offset;
+            mult *= m.multiplier;
+            at = m.leader;
+            steps += 1;
+            if steps > joints.len() {
+                return Err(robot_error(
+                    file,
+                    joint_at(&joints[j].name),
+                    "its <mimic> chain comes back to itself (a cycle of mimic joints)",
+                ));
+            }
+        }
+        let base = coupling[at].expect("an independent joint has a coupling");
+        coupling[j] = Some(Coupling {
+            independent: base.independent,
+            multiplier: mult,
+            offset: off,
+        });
+    }
+    Ok((independent, coupling))
 }
 
 #[cfg(test)]

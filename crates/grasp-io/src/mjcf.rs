@@ -1,0 +1,1079 @@
+//! MuJoCo hands (MJCF): the kinematic tree, sites, fixed tendons, actuators and joint
+//! couplings of the subset of MJCF that hand models use, read with `roxmltree`.
+//!
+//! - **Structure:** `<include file>` (relative to the including file, then to the main
+//!   file), `<default>` classes with `class` and `childclass` inheritance, and
+//!   `<compiler angle eulerseq>` (MuJoCo's defaults: degrees, `xyz`).
+//! - **Frames:** a body's or site's `pos` with one of `quat`, `euler`, `axisangle`,
+//!   `xyaxes` or `zaxis` (sites also `fromto`). A body's joints move it in document
+//!   order, each a rotation about (hinge) or a translation along (slide) its `axis`
+//!   through its `pos`, by `q − ref`, as MuJoCo's forward kinematics does. In the tree
+//!   each joint is followed by a fixed joint back from its anchor, so the joints keep
+//!   the URDF reader's convention (a joint frame at the anchor).
+//! - **Couplings:** `<equality><joint>` with a linear `polycoef`, and `<equality><tendon>`
+//!   on a fixed tendon of two joints, become mimic couplings (the later joint follows).
+//! - **Actuators:** `motor`, `general`, `position`, `velocity`, `intvelocity` and
+//!   `cylinder` on a `joint` or a fixed `tendon`: the moment arm is the gear, times the
+//!   tendon's coefficients. Gains and biases do not enter statics.
+//!
+//! A `free` joint on a body directly under `<worldbody>` (a floating hand or object) is
+//! held fixed, and that body's frame becomes the reference frame; `free` and `ball`
+//! joints inside the tree, `<frame>`, `<composite>`, `<flexcomp>`, `<replicate>`,
+//! `<attach>` and `<equality><connect>` change the kinematics and are errors. Meshes,
+//! geoms, textures and assets are never opened; other elements are ignored, with one
+//! warning per element name.
+
+use crate::urdf::{
+    nearest, Actuator, Joint, JointKind, LimitSource, Robot, Site, MAX_DEPTH, MAX_LINKS,
+};
+use grasp_core::error::ProblemError;
+use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
+use std::collections::{BTreeSet, HashMap};
+use std::path::{Path, PathBuf};
+
+/// Deepest `<include>` nesting (a cycle of includes stops here).
+const MAX_INCLUDE_DEPTH: usize = 16;
+
+/// Most elements read across all files.
+const MAX_ELEMENTS: usize = 1_000_000;
+
+/// One element, with includes expanded.
+#[derive(Debug)]
+struct El {
+    name: String,
+    attrs: Vec<(String, String)>,
+    children: Vec<El>,
+    file: usize,
+    line: u32,
+}
+
+impl El {
+    fn attr(&self, key: &str) -> Option<&str> {
+        self.attrs
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
+    }
+}
+
+struct Reader {
+    /// `<mujoco model>` of the main file.
+    model: Option<String>,
+    files: Vec<String>,
+    main_dir: PathBuf,
+    elements: usize,
+}
+
+fn error(file: &str, element: impl Into<String>, message: impl Into<String>) -> ProblemError {
+    ProblemError::RobotModel {
+        file: file.to_string(),
+        element: element.into(),
+        message: message.into(),
+    }
+}
+
+impl Reader {
+    fn at(&self, e: &El) -> String {
+        format!("<{}> (line {})", e.name, e.line)
+    }
+
+    fn err(&self, e: &El, message: impl Into<String>) -> ProblemError {
+        error(&self.files[e.file], self.at(e), message)
+    }
+
+    fn load(&mut self, path: &Path, depth: usize) -> Result<Vec<El>, ProblemError> {
+        let text = crate::file::read_limited(path)?;
+        self.parse(&text, path.display().to_string(), path.parent(), depth)
+    }
+
+    /// The children of the document's root element, includes expanded.
+    fn parse(
+        &mut self,
+        text: &str,
+        name: String,
+        dir: Option<&Path>,
+        depth: usize,
+    ) -> Result<Vec<El>, ProblemError> {
+        let file = self.files.len();
+        self.files.push(name);
+        let doc = roxmltree::Document::parse(text).map_err(|e| {
+            error(
+                &self.files[file],
+                "(document)",
+                format!("not well-formed XML: {e}"),
+            )
+        })?;
+        let root = doc.root_element();
+        let tag = root.tag_name().name();
+        if tag != "mujoco" && tag != "mujocoinclude" {
+            return Err(error(
+                &self.files[file],
+                format!("<{tag}>"),
+                "the root element of an MJCF file is <mujoco>",
+            ));
+        }
+        if file == 0 {
+            self.model = root.attribute("model").map(str::to_string);
+        }
+        let mut out = Vec::new();
+        for c in root.children().filter(|c| c.is_element()) {
+            self.convert(&doc, c, file, dir, depth, 1, &mut out)?;
+        }
+        Ok(out)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn convert(
+        &mut self,
+        doc: &roxmltree::Document,
+        node: roxmltree::Node,
+        file: usize,
+        dir: Option<&Path>,
+        include_depth: usize,
+        depth: usize,
+        out: &mut Vec<El>,
+    ) -> Result<(), ProblemError> {
+        let line = doc.text_pos_at(node.range().start).row;
+        let name = node.tag_name().name().to_string();
+        if depth > MAX_DEPTH {
+            return Err(error(
+                &self.files[file],
+                format!("<{name}> (line {line})"),
+                format!("elements nested more than {MAX_DEPTH} deep"),
+            ));
+        }
+        self.elements += 1;
+        if self.elements > MAX_ELEMENTS {
+            return Err(error(
+                &self.files[file],
+                format!("<{name}> (line {line})"),
+                format!("more than {MAX_ELEMENTS} elements"),
+            ));
+        }
+        if name == "include" {
+            let Some(target) = node.attribute("file") else {
+                return Err(error(
+                    &self.files[file],
+                    format!("<include> (line {line})"),
+                    "has no file attribute",
+                ));
+            };
+            if include_depth >= MAX_INCLUDE_DEPTH {
+                return Err(error(
+                    &self.files[file],
+                    format!("<include file=\"{target}\"> (line {line})"),
+                    format!("includes nested more than {MAX_INCLUDE_DEPTH} deep (a file that includes itself?)"),
+                ));
+            }
+            let here = dir.map(|d| d.join(target));
+            let path = match here {
+                Some(p) if p.exists() => p,
+                _ => self.main_dir.join(target),
+            };
+            let children = self.load(&path, include_depth + 1).map_err(|e| match e {
+                ProblemError::Io { path, error: io } => error(
+                    &self.files[file],
+                    format!("<include file=\"{target}\"> (line {line})"),
+                    format!("cannot read {path}: {io}"),
+                ),
+                other => other,
+            })?;
+            out.extend(children);
+            return Ok(());
+        }
+        let attrs = node
+            .attributes()
+            .map(|a| (a.name().to_string(), a.value().to_string()))
+            .collect();
+        let mut children = Vec::new();
+        // Assets and visual data are never needed: not even read.
+        if !matches!(
+            name.as_str(),
+            "asset"
+                | "visual"
+                | "sensor"
+                | "contact"
+                | "keyframe"
+                | "custom"
+                | "extension"
+                | "statistic"
+                | "option"
+                | "size"
+                | "geom"
+                | "inertial"
+                | "camera"
+                | "light"
+        ) {
+            for c in node.children().filter(|c| c.is_element()) {
+                self.convert(doc, c, file, dir, include_depth, depth + 1, &mut children)?;
+            }
+        }
+        out.push(El {
+            name,
+            attrs,
+            children,
+            file,
+            line,
+        });
+        Ok(())
+    }
+}
+
+/// `<compiler>` settings that change numbers.
+#[derive(Clone, Copy)]
+struct Compiler {
+    degrees: bool,
+    eulerseq: [u8; 3],
+}
+
+/// Attributes of one element kind per default class, with the class's parent.
+#[derive(Default)]
+struct Defaults {
+    parent: HashMap<String, Option<String>>,
+    attrs: HashMap<(String, &'static str), Vec<(String, String)>>,
+}
+
+const ACTUATORS: [&str; 6] = [
+    "motor",
+    "general",
+    "position",
+    "velocity",
+    "intvelocity",
+    "cylinder",
+];
+const IGNORED_ACTUATORS: [&str; 4] = ["damper", "muscle", "adhesion", "plugin"];
+
+fn default_kind(name: &str) -> Option<&'static str> {
+    match name {
+        "joint" => Some("joint"),
+        "site" => Some("site"),
+        "equality" => Some("equality"),
+        n if ACTUATORS.contains(&n) || IGNORED_ACTUATORS.contains(&n) => Some("actuator"),
+        _ => None,
+    }
+}
+
+impl Defaults {
+    fn read(&mut self, r: &Reader, e: &El, parent: Option<&str>) -> Result<(), ProblemError> {
+        let class = match (e.attr("class"), parent) {
+            (Some(c), _) => c.to_string(),
+            (None, None) => "main".to_string(),
+            (None, Some(_)) => return Err(r.err(e, "a nested <default> needs a class attribute")),
+        };
+        self.parent
+            .insert(class.clone(), parent.map(str::to_string));
+        for c in &e.children {
+            if c.name == "default" {
+                self.read(r, c, Some(&class))?;
+            } else if let Some(kind) = default_kind(&c.name) {
+                let slot = self.attrs.entry((class.clone(), kind)).or_default();
+                for (k, v) in &c.attrs {
+                    slot.retain(|(k2, _)| k2 != k);
+                    slot.push((k.clone(), v.clone()));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The value of `key` for an element of `kind` in `class`: its own, else the
+    /// nearest class's up to `main`.
+    fn lookup<'a>(
+        &'a self,
+        e: &'a El,
+        kind: &'static str,
+        class: &str,
+        key: &str,
+    ) -> Option<&'a str> {
+        if let Some(v) = e.attr(key) {
+            return Some(v);
+        }
+        let mut at = Some(class.to_string());
+        let mut steps = 0;
+        while let Some(c) = at {
+            if let Some(v) = self
+                .attrs
+                .get(&(c.clone(), kind))
+                .and_then(|a| a.iter().find(|(k, _)| k == key))
+            {
+                return Some(&v.1);
+            }
+            at = self.parent.get(&c).cloned().flatten();
+            steps += 1;
+            if steps > 64 {
+                break;
+            }
+        }
+        None
+    }
+}
+
+/// An element's attributes through its default class.
+struct View<'a> {
+    r: &'a Reader,
+    d: &'a Defaults,
+    e: &'a El,
+    kind: &'static str,
+    class: String,
+}
+
+impl<'a> View<'a> {
+    fn get(&self, key: &str) -> Option<&'a str> {
+        self.d.lookup(self.e, self.kind, &self.class, key)
+    }
+
+    fn numbers(&self, key: &str) -> Result<Option<Vec<f64>>, ProblemError> {
+        let Some(text) = self.get(key) else {
+            return Ok(None);
+        };
+        text.split_whitespace()
+            .map(|v| {
+                v.parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite() && x.abs() <= 1e12)
+            })
+            .collect::<Option<Vec<f64>>>()
+            .map(Some)
+            .ok_or_else(|| {
+                self.r.err(
+                    self.e,
+                    format!("{key}=\"{text}\": expected finite numbers of magnitude at most 1e12"),
+                )
+            })
+    }
+
+    fn fixed<const N: usize>(&self, key: &str) -> Result<Option<[f64; N]>, ProblemError> {
+        match self.numbers(key)? {
+            None => Ok(None),
+            Some(v) => <[f64; N]>::try_from(v.as_slice()).map(Some).map_err(|_| {
+                self.r.err(
+                    self.e,
+                    format!("{key}: expected {N} numbers, got {}", v.len()),
+                )
+            }),
+        }
+    }
+
+    /// The first of up to `max` numbers (MuJoCo pads such vectors with zeros).
+    fn leading(&self, key: &str, max: usize) -> Result<Option<f64>, ProblemError> {
+        match self.numbers(key)? {
+            None => Ok(None),
+            Some(v) if v.is_empty() || v.len() > max => Err(self.r.err(
+                self.e,
+                format!("{key}: expected 1 to {max} numbers, got {}", v.len()),
+            )),
+            Some(v) => Ok(Some(v[0])),
+        }
+    }
+
+    fn flag(&self, key: &str) -> Result<Option<bool>, ProblemError> {
+        match self.get(key) {
+            None | Some("auto") => Ok(None),
+            Some("true") => Ok(Some(true)),
+            Some("false") => Ok(Some(false)),
+            Some(v) => Err(self.r.err(
+                self.e,
+                format!("{key}=\"{v}\": expected true, false or auto"),
+            )),
+        }
+    }
+
+    fn range(&self, key: &str) -> Result<Option<(f64, f64)>, ProblemError> {
+        match self.fixed::<2>(key)? {
+            None => Ok(None),
+            Some([lo, hi]) if lo <= hi => Ok(Some((lo, hi))),
+            Some([lo, hi]) => Err(self.r.err(
+                self.e,
+                format!("{key}=\"{lo} {hi}\": the lower bound is above the upper"),
+            )),
+        }
+    }
+
+    /// `pos` and the orientation (at most one of quat, euler, axisangle, xyaxes, zaxis).
+    fn frame(&self, c: Compiler) -> Result<Isometry3<f64>, ProblemError> {
+        let pos = self.fixed::<3>("pos")?.unwrap_or([0.0; 3]);
+        let given: Vec<&str> = ["quat", "euler", "axisangle", "xyaxes", "zaxis"]
+            .into_iter()
+            .filter(|k| self.e.attr(k).is_some())
+            .collect();
+        if given.len() > 1 {
+            return Err(self.r.err(
+                self.e,
+                format!("more than one orientation: {}", given.join(", ")),
+            ));
+        }
+        // An orientation from the element wins over one from its class.
+        let key = given.first().copied().or_else(|| {
+            ["quat", "euler", "axisangle", "xyaxes", "zaxis"]
+                .into_iter()
+                .find(|k| self.get(k).is_some())
+        });
+        let angle = |a: f64| if c.degrees { a.to_radians() } else { a };
+        let rot = match key {
+            None => UnitQuaternion::identity(),
+            Some("quat") => {
+                let [w, x, y, z] = self.fixed::<4>("quat")?.unwrap_or([1.0, 0.0, 0.0, 0.0]);
+                let q = nalgebra::Quaternion::new(w, x, y, z);
+                if q.norm() < 1e-10 {
+                    return Err(self.r.err(self.e, "quat: a zero quaternion"));
+                }
+                UnitQuaternion::from_quaternion(q)
+            }
+            Some("axisangle") => {
+                let [x, y, z, a] = self.fixed::<4>("axisangle")?.unwrap_or_default();
+                let axis = unit(self, "axisangle", [x, y, z])?;
+                UnitQuaternion::from_axis_angle(&axis, angle(a))
+            }
+            Some("euler") => {
+                let e = self.fixed::<3>("euler")?.unwrap_or_default();
+                let mut q = UnitQuaternion::identity();
+                for (k, &ch) in c.eulerseq.iter().enumerate() {
+                    let axis = match ch.to_ascii_lowercase() {
+                        b'x' => Vector3::x_axis(),
+                        b'y' => Vector3::y_axis(),
+                        _ => Vector3::z_axis(),
+                    };
+                    let r = UnitQuaternion::from_axis_angle(&axis, angle(e[k]));
+                    // Lower case: about the moving axes (intrinsic); upper case: fixed.
+                    q = if ch.is_ascii_lowercase() {
+                        q * r
+                    } else {
+                        r * q
+                    };
+                }
+                q
+            }
+            Some("xyaxes") => {
+                let v = self.fixed::<6>("xyaxes")?.unwrap_or_default();
+                let x = unit(self, "xyaxes", [v[0], v[1], v[2]])?.into_inner();
+                let y0 = Vector3::new(v[3], v[4], v[5]);
+                let y = y0 - x * x.dot(&y0);
+                if y.norm() < 1e-10 {
+                    return Err(self
+                        .r
+                        .err(self.e, "xyaxes: the y axis is parallel to the x axis"));
+                }
+                let y = y.normalize();
+                let z = x.cross(&y);
+                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(
+                    Matrix3::from_columns(&[x, y, z]),
+                ))
+            }
+            Some(_) => {
+                let z = unit(
+                    self,
+                    "zaxis",
+                    self.fixed::<3>("zaxis")?.unwrap_or([0.0, 0.0, 1.0]),
+                )?;
+                z_to(z)
+            }
+        };
+        Ok(Isometry3::from_parts(
+            Translation3::from(Vector3::from(pos)),
+            rot,
+        ))
+    }
+}
+
+/// The rotation that takes (0, 0, 1) to `z` by the shortest arc (π about x when `z`
+/// points down), as MuJoCo's `zaxis`.
+fn z_to(z: Unit<Vector3<f64>>) -> UnitQuaternion<f64> {
+    UnitQuaternion::rotation_between(&Vector3::z(), &z).unwrap_or_else(|| {
+        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+    })
+}
+
+fn unit(v: &View, key: &str, x: [f64; 3]) -> Result<Unit<Vector3<f64>>, ProblemError> {
+    let x = Vector3::from(x);
+    if x.norm() < 1e-10 {
+        return Err(v.r.err(v.e, format!("{key}: a zero axis")));
+    }
+    Ok(Unit::new_normalize(x))
+}
+
+/// The tree being built.
+struct Tree {
+    links: Vec<String>,
+    link_lines: Vec<u32>,
+    body_link: HashMap<String, usize>,
+    joints: Vec<Joint>,
+    reference: Vec<f64>,
+    sites: Vec<Site>,
+    warnings: Vec<String>,
+    ignored: BTreeSet<String>,
+}
+
+impl Tree {
+    fn add_link(&mut self, name: String, line: u32) -> usize {
+        self.links.push(name);
+        self.link_lines.push(line);
+        self.links.len() - 1
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn add_joint(
+        &mut self,
+        name: String,
+        kind: JointKind,
+        origin: Isometry3<f64>,
+        axis: Unit<Vector3<f64>>,
+        parent: usize,
+        child: usize,
+        range: Option<(f64, f64)>,
+        reference: f64,
+        line: u32,
+    ) {
+        self.joints.push(Joint {
+            name,
+            kind,
+            origin,
+            axis,
+            parent,
+            child,
+            effort: None,
+            lower: range.map(|r| r.0),
+            upper: range.map(|r| r.1),
+            mimic: None,
+            line,
+        });
+        self.reference.push(reference);
+    }
+}
+
+struct Ctx<'a> {
+    r: &'a Reader,
+    d: &'a Defaults,
+    c: Compiler,
+}
+
+impl Ctx<'_> {
+    fn view<'b>(&'b self, e: &'b El, kind: &'static str, childclass: &str) -> View<'b> {
+        View {
+            r: self.r,
+            d: self.d,
+            e,
+            kind,
+            class: e.attr("class").unwrap_or(childclass).to_string(),
+        }
+    }
+
+    fn body(
+        &self,
+        t: &mut Tree,
+        e: &El,
+        parent: usize,
+        childclass: &str,
+        top: bool,
+    ) -> Result<(), ProblemError> {
+        if t.links.len() >= MAX_LINKS {
+            return Err(self
+                .r
+                .err(e, format!("more than {MAX_LINKS} bodies and joints")));
+        }
+        let v = self.view(e, "body", childclass);
+        let name = e
+            .attr("name")
+            .map_or_else(|| format!("body at line {}", e.line), str::to_string);
+        let inner = e.attr("childclass").unwrap_or(childclass).to_string();
+        let mut local = v.frame(self.c)?;
+        let joints: Vec<&El> = e
+            .children
+            .iter()
+            .filter(|c| c.name == "joint" || c.name == "freejoint")
+            .collect();
+        let mut moving = Vec::new();
+        for j in &joints {
+            let jv = self.view(j, "joint", &inner);
+            let kind = if j.name == "freejoint" {
+                "free"
+            } else {
+                jv.get("type").unwrap_or("hinge")
+            };
+            match kind {
+                "hinge" | "slide" => moving.push((*j, kind == "hinge")),
+                "free" if top => {
+                    t.warnings.push(format!(
+                        "{}: {}: the free joint of `{name}` is held fixed; that body's frame is the reference frame of object_pose",
+                        self.r.files[j.file],
+                        self.r.at(j)
+                    ));
+                    local = Isometry3::identity();
+                }
+                "free" | "ball" => {
+                    return Err(self.r.err(
+                        j,
+                        format!("a {kind} joint inside the hand (body `{name}`) is not supported: only hinge and slide joints, and a free joint on a body directly under <worldbody>"),
+                    ))
+                }
+                other => return Err(self.r.err(j, format!("unknown joint type `{other}` (hinge, slide, ball or free)"))),
+            }
+        }
+        // Each joint moves the body about its anchor: T(p) R T(−p), in order.
+        let mut at = parent;
+        let mut origin = local;
+        for (k, (j, hinge)) in moving.iter().enumerate() {
+            let jv = self.view(j, "joint", &inner);
+            let jname = j
+                .attr("name")
+                .map_or_else(|| format!("{name} joint {k}"), str::to_string);
+            let pos = Vector3::from(jv.fixed::<3>("pos")?.unwrap_or([0.0; 3]));
+            let axis = unit(
+                &jv,
+                "axis",
+                jv.fixed::<3>("axis")?.unwrap_or([0.0, 0.0, 1.0]),
+            )?;
+            let to_rad = |x: f64| {
+                if *hinge && self.c.degrees {
+                    x.to_radians()
+                } else {
+                    x
+                }
+            };
+            let reference = to_rad(jv.leading("ref", 1)?.unwrap_or(0.0));
+            let limited = jv.flag("limited")?;
+            let range = jv
+                .range("range")?
+                .filter(|_| limited != Some(false))
+                .map(|(a, b)| (to_rad(a), to_rad(b)));
+            let child = t.add_link(format!("{name}/{jname}"), j.line);
+            t.add_joint(
+                jname,
+                if *hinge {
+                    JointKind::Revolute
+                } else {
+                    JointKind::Prismatic
+                },
+                origin * Translation3::from(pos),
+                axis,
+                at,
+                child,
+                range,
+                reference,
+                j.line,
+            );
+            at = child;
+            origin = Isometry3::from_parts(Translation3::from(-pos), UnitQuaternion::identity());
+        }
+        let link = t.add_link(name.clone(), e.line);
+        if t.body_link.insert(name.clone(), link).is_some() && e.attr("name").is_some() {
+            return Err(self.r.err(e, format!("a second body named `{name}`")));
+        }
+        t.add_joint(
+            format!("{name} (fixed)"),
+            JointKind::Fixed,
+            origin,
+            Vector3::z_axis(),
+            at,
+            link,
+            None,
+            0.0,
+            e.line,
+        );
+        for c in &e.children {
+            match c.name.as_str() {
+                "body" => self.body(t, c, link, &inner, false)?,
+                "joint" | "freejoint" | "geom" | "inertial" | "camera" | "light" => {}
+                "site" => {
+                    let sv = self.view(c, "site", &inner);
+                    let frame = match sv.fixed::<6>("fromto")? {
+                        Some(ft) => {
+                            let (a, b) = (
+                                Vector3::new(ft[0], ft[1], ft[2]),
+                                Vector3::new(ft[3], ft[4], ft[5]),
+                            );
+                            // MuJoCo's z axis points from `to` back to `from`.
+                            let dir = a - b;
+                            let rot = if dir.norm() < 1e-12 {
+                                UnitQuaternion::identity()
+                            } else {
+                                z_to(Unit::new_normalize(dir))
+                            };
+                            Isometry3::from_parts(Translation3::from((a + b) / 2.0), rot)
+                        }
+                        None => sv.frame(self.c)?,
+                    };
+                    t.sites.push(Site {
+                        name: c
+                            .attr("name")
+                            .map_or_else(|| format!("site at line {}", c.line), str::to_string),
+                        link,
+                        frame,
+                        line: c.line,
+                    });
+                }
+                "frame" | "composite" | "flexcomp" | "replicate" | "attach" => {
+                    return Err(self
+                        .r
+                        .err(c, "changes the kinematic tree and is not supported here"))
+                }
+                other => {
+                    t.ignored.insert(other.to_string());
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Robot {
+    /// Reads an MJCF file and the files it includes.
+    pub fn load_mjcf(path: &Path) -> Result<Self, ProblemError> {
+        let text = crate::file::read_limited(path)?;
+        Self::parse_mjcf(&text, &path.display().to_string(), path.parent())
+    }
+
+    /// Parses MJCF text; `source` names it in messages, includes are found relative to
+    /// `dir` (the file's folder).
+    pub fn parse_mjcf(text: &str, source: &str, dir: Option<&Path>) -> Result<Self, ProblemError> {
+        let mut r = Reader {
+            model: None,
+            files: Vec::new(),
+            main_dir: dir.map(Path::to_path_buf).unwrap_or_default(),
+            elements: 0,
+        };
+        let top = r.parse(text, source.to_string(), dir, 0)?;
+        let mut c = Compiler {
+            degrees: true,
+            eulerseq: *b"xyz",
+        };
+        let mut d = Defaults::default();
+        d.parent.insert("main".into(), None);
+        let mut ignored = BTreeSet::new();
+        for e in &top {
+            match e.name.as_str() {
+                "compiler" => {
+                    match e.attr("angle") {
+                        None => {}
+                        Some("degree") => c.degrees = true,
+                        Some("radian") => c.degrees = false,
+                        Some(v) => {
+                            return Err(
+                                r.err(e, format!("angle=\"{v}\": expected degree or radian"))
+                            )
+                        }
+                    }
+                    if let Some(seq) = e.attr("eulerseq") {
+                        let b = seq.as_bytes();
+                        if b.len() != 3 || !b.iter().all(|ch| b"xyzXYZ".contains(ch)) {
+                            return Err(r.err(
+                                e,
+                                format!("eulerseq=\"{seq}\": expected three of x, y, z, X, Y, Z"),
+                            ));
+                        }
+                        c.eulerseq.copy_from_slice(b);
+                    }
+                    if e.attr("coordinate").is_some_and(|v| v != "local") {
+                        return Err(r.err(
+                            e,
+                            "coordinate=\"global\" is not supported (MuJoCo 3 removed it)",
+                        ));
+                    }
+                }
+                "default" => d.read(&r, e, None)?,
+                "worldbody" | "tendon" | "actuator" | "equality" => {}
+                "asset" | "visual" | "sensor" | "contact" | "keyframe" | "custom" | "extension"
+                | "statistic" | "option" | "size" => {}
+                other => {
+                    ignored.insert(other.to_string());
+                }
+            }
+        }
+        let ctx = Ctx { r: &r, d: &d, c };
+        let mut t = Tree {
+            links: Vec::new(),
+            link_lines: Vec::new(),
+            body_link: HashMap::new(),
+            joints: Vec::new(),
+            reference: Vec::new(),
+            sites: Vec::new(),
+            warnings: Vec::new(),
+            ignored,
+        };
+        let world = t.add_link("world".into(), 0);
+        t.body_link.insert("world".into(), world);
+        for wb in top.iter().filter(|e| e.name == "worldbody") {
+            for e in &wb.children {
+                match e.name.as_str() {
+                    "body" => ctx.body(&mut t, e, world, "main", true)?,
+                    "site" => {
+                        let sv = ctx.view(e, "site", "main");
+                        t.sites.push(Site {
+                            name: e
+                                .attr("name")
+                                .map_or_else(|| format!("site at line {}", e.line), str::to_string),
+                            link: world,
+                            frame: sv.frame(c)?,
+                            line: e.line,
+                        });
+                    }
+                    "frame" | "composite" | "flexcomp" | "replicate" | "attach" => {
+                        return Err(r.err(e, "changes the kinematic tree and is not supported here"))
+                    }
+                    "geom" | "camera" | "light" => {}
+                    other => {
+                        t.ignored.insert(other.to_string());
+                    }
+                }
+            }
+        }
+        let joint_index: HashMap<String, usize> = t
+            .joints
+            .iter()
+            .enumerate()
+            .filter(|(_, j)| j.kind != JointKind::Fixed)
+            .map(|(i, j)| (j.name.clone(), i))
+            .collect();
+        let moving: Vec<String> = t
+            .joints
+            .iter()
+            .filter(|j| j.kind != JointKind::Fixed)
+            .map(|j| j.name.clone())
+            .collect();
+        let find_joint = |e: &El, name: &str| -> Result<usize, ProblemError> {
+            joint_index.get(name).copied().ok_or_else(|| {
+                r.err(
+                    e,
+                    format!(
+                        "joint `{name}` is not a hinge or slide joint of this model ({})",
+                        nearest(name, moving.iter().map(String::as_str))
+                    ),
+                )
+            })
+        };
+        // Fixed tendons: name → (joint, coefficient).
+        let mut tendons: HashMap<String, Vec<(usize, f64)>> = HashMap::new();
+        let mut spatial = BTreeSet::new();
+        for te in top.iter().filter(|e| e.name == "tendon") {
+            for e in &te.children {
+                let Some(name) = e.attr("name") else { continue };
+                match e.name.as_str() {
+                    "fixed" => {
+                        let mut terms = Vec::new();
+                        for j in e.children.iter().filter(|j| j.name == "joint") {
+                            let jn = j
+                                .attr("joint")
+                                .ok_or_else(|| r.err(j, "has no joint attribute"))?;
+                            let v = View {
+                                r: &r,
+                                d: &d,
+                                e: j,
+                                kind: "tendon-joint",
+                                class: String::new(),
+                            };
+                            let coef = v.leading("coef", 1)?.unwrap_or(1.0);
+                            terms.push((find_joint(j, jn)?, coef));
+                        }
+                        tendons.insert(name.to_string(), terms);
+                    }
+                    _ => {
+                        spatial.insert(name.to_string());
+                    }
+                }
+            }
+        }
+        // Couplings from equalities.
+        for eqs in top.iter().filter(|e| e.name == "equality") {
+            for e in &eqs.children {
+                let v = View {
+                    r: &r,
+                    d: &d,
+                    e,
+                    kind: "equality",
+                    class: e.attr("class").unwrap_or("main").to_string(),
+                };
+                if v.get("active") == Some("false") {
+                    continue;
+                }
+                let poly = v
+                    .numbers("polycoef")?
+                    .unwrap_or_else(|| vec![0.0, 1.0, 0.0, 0.0, 0.0]);
+                if poly.len() > 5 || poly.iter().skip(2).any(|&x| x != 0.0) {
+                    return Err(r.err(
+                        e,
+                        "polycoef: only a linear coupling (a0 a1 0 0 0) is supported",
+                    ));
+                }
+                let a0 = poly.first().copied().unwrap_or(0.0);
+                let a1 = poly.get(1).copied().unwrap_or(1.0);
+                // (follower, leader, multiplier, offset) in motion coordinates q − ref.
+                let (follower, leader, mult, off) = match e.name.as_str() {
+                    "joint" => {
+                        let j1 = find_joint(
+                            e,
+                            e.attr("joint1").ok_or_else(|| r.err(e, "has no joint1"))?,
+                        )?;
+                        let Some(j2) = e.attr("joint2") else {
+                            return Err(r.err(
+                                e,
+                                "a joint equality without joint2 locks the joint; not supported",
+                            ));
+                        };
+                        (j1, find_joint(e, j2)?, a1, a0)
+                    }
+                    "tendon" => {
+                        if e.attr("tendon2").is_some() {
+                            return Err(r.err(e, "a coupling of two tendons is not supported; one fixed tendon of two joints is"));
+                        }
+                        let name = e
+                            .attr("tendon1")
+                            .ok_or_else(|| r.err(e, "has no tendon1"))?;
+                        let terms = tendons.get(name).ok_or_else(|| {
+                            r.err(
+                                e,
+                                format!("tendon1 `{name}` is not a fixed tendon of this model"),
+                            )
+                        })?;
+                        match terms.as_slice() {
+                            // c1 m1 + c2 m2 = a0: the later joint follows.
+                            [(j1, c1), (j2, c2)] if *c1 != 0.0 && *c2 != 0.0 && j1 != j2 => {
+                                let ((ja, ca), (jb, cb)) = if j1 < j2 { ((*j1, *c1), (*j2, *c2)) } else { ((*j2, *c2), (*j1, *c1)) };
+                                (jb, ja, -ca / cb, a0 / cb)
+                            }
+                            _ => return Err(r.err(e, format!("tendon `{name}` couples {} joints; a rigid tendon coupling is supported between exactly two", terms.len()))),
+                        }
+                    }
+                    "connect" | "weld" | "distance" | "flex" => {
+                        return Err(r.err(
+                            e,
+                            "a loop-closing equality changes the kinematics and is not supported",
+                        ))
+                    }
+                    other => {
+                        t.ignored.insert(format!("equality/{other}"));
+                        continue;
+                    }
+                };
+                if follower == leader {
+                    return Err(r.err(e, "couples a joint to itself"));
+                }
+                if t.joints[follower].mimic.is_some() {
+                    return Err(r.err(e, format!("joint `{}` is already coupled by another equality; one coupling per joint is supported", t.joints[follower].name)));
+                }
+                t.joints[follower].mimic = Some(crate::urdf::Mimic {
+                    leader,
+                    multiplier: mult,
+                    offset: off,
+                });
+            }
+        }
+        // Actuators.
+        let mut actuators = Vec::new();
+        for group in top.iter().filter(|e| e.name == "actuator") {
+            for e in &group.children {
+                if !ACTUATORS.contains(&e.name.as_str()) {
+                    t.ignored.insert(format!("actuator/{}", e.name));
+                    continue;
+                }
+                let v = View {
+                    r: &r,
+                    d: &d,
+                    e,
+                    kind: "actuator",
+                    class: e.attr("class").unwrap_or("main").to_string(),
+                };
+                let name = e
+                    .attr("name")
+                    .map_or_else(|| format!("{} at line {}", e.name, e.line), str::to_string);
+                let gear = v.leading("gear", 6)?.unwrap_or(1.0);
+                let moment: Vec<(usize, f64)> = if let Some(j) =
+                    v.get("joint").or_else(|| v.get("jointinparent"))
+                {
+                    vec![(find_joint(e, j)?, gear)]
+                } else if let Some(tn) = v.get("tendon") {
+                    match tendons.get(tn) {
+                        Some(terms) => terms.iter().map(|&(j, c)| (j, gear * c)).collect(),
+                        None if spatial.contains(tn) => {
+                            return Err(r.err(e, format!("tendon `{tn}` is a spatial tendon, whose moment arms depend on the configuration; only fixed tendons are supported")))
+                        }
+                        None => return Err(r.err(e, format!("tendon `{tn}` is not a tendon of this model"))),
+                    }
+                } else {
+                    t.warnings.push(format!(
+                        "{}: {}: actuator `{name}` drives neither a joint nor a tendon; ignored",
+                        r.files[e.file],
+                        r.at(e)
+                    ));
+                    continue;
+                };
+                let forcerange = v.range("forcerange")?;
+                let ctrlrange = v.range("ctrlrange")?;
+                let force_limited = v.flag("forcelimited")?.unwrap_or(forcerange.is_some());
+                let ctrl_limited = v.flag("ctrllimited")?.unwrap_or(ctrlrange.is_some());
+                // The largest |u| inside the range on both sides of 0.
+                let symmetric = |(lo, hi): (f64, f64)| (-lo).min(hi).max(0.0);
+                let bias = match e.name.as_str() {
+                    "general" => v.get("biastype").unwrap_or("none") != "none",
+                    "motor" => false,
+                    _ => true,
+                };
+                let gain_fixed = v.get("gaintype").unwrap_or("fixed") == "fixed";
+                let (limit, source, range) = if force_limited && forcerange.is_some() {
+                    let fr = forcerange.unwrap_or_default();
+                    (Some(symmetric(fr)), LimitSource::Forcerange, fr)
+                } else if ctrl_limited && ctrlrange.is_some() && !bias && gain_fixed {
+                    let gain = if e.name == "motor" {
+                        1.0
+                    } else {
+                        v.leading("gainprm", 10)?.unwrap_or(1.0)
+                    };
+                    let (lo, hi) = ctrlrange.unwrap_or_default();
+                    let (a, b) = (gain * lo, gain * hi);
+                    let fr = (a.min(b), a.max(b));
+                    (Some(symmetric(fr)), LimitSource::Ctrlrange, fr)
+                } else {
+                    (None, LimitSource::None, (0.0, 0.0))
+                };
+                if limit.is_some() && range.0 != -range.1 {
+                    t.warnings.push(format!(
+                        "{}: {}: actuator `{name}` has the asymmetric force range [{}, {}]; the model's limits are symmetric, so |u| ≤ {} is used",
+                        r.files[e.file], r.at(e), range.0, range.1, limit.unwrap_or(0.0)
+                    ));
+                }
+                actuators.push(Actuator {
+                    name,
+                    kind: e.name.clone(),
+                    moment,
+                    limit: limit.filter(|&l| l > 0.0),
+                    limit_source: if limit.is_some_and(|l| l > 0.0) {
+                        source
+                    } else {
+                        LimitSource::None
+                    },
+                    line: e.line,
+                });
+            }
+        }
+        let mut names: HashMap<&str, u32> = HashMap::new();
+        for a in &actuators {
+            if let Some(prev) = names.insert(&a.name, a.line) {
+                return Err(error(
+                    source,
+                    format!("actuator `{}` (line {})", a.name, a.line),
+                    format!("a second actuator of that name (the first is at line {prev})"),
+                ));
+            }
+        }
+        for name in &t.ignored {
+            t.warnings.push(format!(
+                "{source}: <{name}> ignored (outside the statics subset of MJCF)"
+            ));
+        }
+        let model = r.model.clone().unwrap_or_else(|| {
+            Path::new(source)
+                .file_stem()
+                .map_or("mjcf".into(), |s| s.to_string_lossy().into_owned())
+        });
+        let mut robot = Robot::from_tree(
+            model,
+            source.to_string(),
+            t.links,
+            t.link_lines,
+            t.joints,
+            &t.reference,
+            t.warnings,
+        )?;
+        robot.sites = t.sites;
+        robot.actuators = actuators;
+        Ok(robot)
+    }
+}

@@ -1,0 +1,166 @@
+//! MJCF hands against MuJoCo (fixtures/mjcf/oracle, written by scripts/oracle_mjcf.py):
+//! Jᵀ, T and G per configuration, and malformed files as named errors.
+
+use grasp_core::error::ProblemError;
+use grasp_io::hand::HandFile;
+use grasp_io::urdf::Robot;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+fn repo(p: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(p)
+}
+
+#[test]
+fn jacobians_and_transmissions_match_mujoco() {
+    for name in ["shadow", "adroit", "robotiq-s", "jaco", "tendon-test"] {
+        let dir = repo("fixtures/mjcf/oracle");
+        let text = std::fs::read_to_string(dir.join(format!("{name}.json"))).unwrap();
+        let oracle: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let cases = oracle["cases"].as_array().unwrap();
+        assert!(cases.len() >= 50, "{name}: {} configurations", cases.len());
+        let (mut worst_j, mut worst_t): (f64, f64) = (0.0, 0.0);
+        for case in cases {
+            let file: HandFile = serde_json::from_value(case["problem"].clone()).unwrap();
+            let label = case["problem"]["name"].as_str().unwrap().to_string();
+            let built = file
+                .into_problem(&dir)
+                .unwrap_or_else(|e| panic!("{label}: {e}"));
+            let p = &built.problem;
+            let expect: BTreeMap<String, Vec<f64>> =
+                serde_json::from_value(case["jacobian_transpose"].clone()).unwrap();
+            let scale = expect
+                .values()
+                .flatten()
+                .fold(0.0f64, |a, v| a.max(v.abs()));
+            let n = p.force_dim();
+            for (j, jname) in p.joint_names.iter().enumerate() {
+                for c in 0..n {
+                    let err = (p.jacobian_transpose[(j, c)] - expect[jname][c]).abs() / scale;
+                    worst_j = worst_j.max(err);
+                    assert!(err <= 1e-10, "{label}: Jᵀ[{jname}][{c}] off by {err:e}");
+                }
+            }
+            for (jname, row) in &expect {
+                if !p.joint_names.contains(jname) {
+                    assert!(
+                        row.iter().all(|&v| v.abs() <= 1e-14 * scale),
+                        "{label}: {jname} moves a contact but is not in the problem"
+                    );
+                }
+            }
+            let tr: BTreeMap<String, BTreeMap<String, f64>> =
+                serde_json::from_value(case["transmission"].clone()).unwrap();
+            let t = p
+                .transmission
+                .as_ref()
+                .expect("an actuated MJCF hand has a transmission");
+            let tscale = tr
+                .values()
+                .flat_map(|r| r.values())
+                .fold(0.0f64, |a, v| a.max(v.abs()));
+            for (j, jname) in p.joint_names.iter().enumerate() {
+                for (a, aname) in t.actuator_names.iter().enumerate() {
+                    let want = tr[jname].get(aname).copied().unwrap_or(0.0);
+                    let err = (t.matrix[(j, a)] - want).abs() / tscale;
+                    worst_t = worst_t.max(err);
+                    assert!(
+                        err <= 1e-10,
+                        "{label}: T[{jname}][{aname}] = {} vs MuJoCo {want}",
+                        t.matrix[(j, a)]
+                    );
+                }
+                // Every actuator MuJoCo has on this joint is in the problem.
+                for aname in tr[jname].keys() {
+                    assert!(
+                        t.actuator_names.contains(aname),
+                        "{label}: {aname} drives {jname} but is missing"
+                    );
+                }
+            }
+            let g: Vec<Vec<f64>> = serde_json::from_value(case["grasp_matrix"].clone()).unwrap();
+            let gscale = g.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+            for r in 0..6 {
+                for c in 0..n {
+                    let err = (p.grasp_matrix[(r, c)] - g[r][c]).abs() / gscale;
+                    assert!(err <= 1e-10, "{label}: G[{r}][{c}] off by {err:e}");
+                }
+            }
+        }
+        eprintln!(
+            "{name}: {} configurations, worst relative error Jᵀ {worst_j:.1e}, T {worst_t:.1e}",
+            cases.len()
+        );
+    }
+}
+
+fn parse_err(text: &str) -> String {
+    match Robot::parse_mjcf(text, "bad.xml", None) {
+        Ok(_) => panic!("accepted: {text}"),
+        Err(e @ ProblemError::RobotModel { .. }) => e.to_string(),
+        Err(e) => panic!("not a model error: {e}"),
+    }
+}
+
+#[test]
+fn malformed_mjcf_is_a_named_error() {
+    let body = |inner: &str| {
+        format!("<mujoco><worldbody><body name=\"b\">{inner}</body></worldbody></mujoco>")
+    };
+    for (text, needle) in [
+        ("<robot/>".to_string(), "root element"),
+        ("<mujoco><worldbody>".to_string(), "well-formed"),
+        (body("<joint type=\"ball\"/><body><joint type=\"ball\"/></body>"), "ball joint"),
+        (body("<body><freejoint/></body>"), "free joint"),
+        (body("<joint axis=\"0 0 0\"/>"), "zero axis"),
+        (body("<joint pos=\"1 nan 0\"/>"), "finite numbers"),
+        (body("<joint type=\"spring\"/>"), "unknown joint type"),
+        (body("<frame/>"), "changes the kinematic tree"),
+        (body("<site quat=\"0 0 0 0\"/>"), "zero quaternion"),
+        (body("<site quat=\"1 0 0 0\" euler=\"0 0 0\"/>"), "more than one orientation"),
+        ("<mujoco><compiler angle=\"grad\"/></mujoco>".to_string(), "degree or radian"),
+        ("<mujoco><compiler eulerseq=\"xxq\"/></mujoco>".to_string(), "eulerseq"),
+        ("<mujoco><include file=\"missing.xml\"/></mujoco>".to_string(), "cannot read"),
+        ("<mujoco><actuator><motor joint=\"nope\"/></actuator></mujoco>".to_string(), "not a hinge or slide joint"),
+        ("<mujoco><worldbody><body><joint name=\"a\"/><joint name=\"b\"/></body></worldbody><equality><joint joint1=\"a\" joint2=\"b\" polycoef=\"0 1 2 0 0\"/></equality></mujoco>".to_string(), "only a linear coupling"),
+        ("<mujoco><worldbody><body><joint name=\"a\"/></body></worldbody><equality><connect body1=\"a\" body2=\"b\" anchor=\"0 0 0\"/></equality></mujoco>".to_string(), "loop-closing"),
+        ("<mujoco><worldbody><body><joint name=\"a\"/></body></worldbody><tendon><spatial name=\"s\"/></tendon><actuator><motor tendon=\"s\"/></actuator></mujoco>".to_string(), "spatial tendon"),
+        ("<mujoco><worldbody><body><joint name=\"a\"/><joint name=\"b\"/></body></worldbody><actuator><motor joint=\"a\" forcerange=\"2 1\"/></actuator></mujoco>".to_string(), "lower bound is above"),
+        (format!("<mujoco><worldbody>{}{}</worldbody></mujoco>", "<body>".repeat(100_000), "</body>".repeat(100_000)), "nested"),
+    ] {
+        let msg = parse_err(&text);
+        assert!(msg.contains(needle), "{needle:?} not in {msg:?}");
+    }
+    // A self-including file stops at the include depth.
+    let dir = std::env::temp_dir().join(format!("gt-mjcf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("self.xml"),
+        "<mujoco><include file=\"self.xml\"/></mujoco>",
+    )
+    .unwrap();
+    let e = Robot::load(&dir.join("self.xml")).unwrap_err().to_string();
+    assert!(e.contains("nested more than"), "{e}");
+}
+
+#[test]
+fn unknown_elements_warn_once_and_degrees_are_the_default() {
+    let text = r#"<mujoco><worldbody><body name="b"><joint name="j" axis="0 0 1" range="0 90" ref="45"/><plugin/><plugin/></body></worldbody><flag/></mujoco>"#;
+    let r = Robot::parse_mjcf(text, "w.xml", None).unwrap();
+    let j = &r.joints[r.joint("j").unwrap()];
+    assert!((j.upper.unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+    assert_eq!(
+        r.warnings.iter().filter(|w| w.contains("<plugin>")).count(),
+        1,
+        "{:?}",
+        r.warnings
+    );
+    assert_eq!(
+        r.warnings.iter().filter(|w| w.contains("<flag>")).count(),
+        1
+    );
+    // Motion is q − ref: at q = ref the body is where the file puts it.
+    let pose = r.pose(&[std::f64::consts::FRAC_PI_4]);
+    let b = r.link("b").unwrap();
+    assert!((pose.links[b].rotation.angle()).abs() < 1e-15);
+}
