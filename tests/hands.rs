@@ -15,7 +15,11 @@ fn fixture(name: &str) -> String {
     format!("{}/fixtures/{name}", env!("CARGO_MANIFEST_DIR"))
 }
 
-const HANDS: [&str; 2] = ["hands/allegro-pinch.json", "hands/ability-tripod.json"];
+const HANDS: [&str; 3] = [
+    "hands/allegro-pinch.json",
+    "hands/ability-tripod.json",
+    "hands/shadow-tripod.json",
+];
 
 fn json(out: &Output) -> serde_json::Value {
     assert!(

@@ -137,7 +137,8 @@ class Problem:
         (``{"model": "pcwf", "mu": 0.5}``; ``sfcl``/``sfce`` add ``mu_torsion``), the
         wrench (default zero) and any option of the matrix form (``torque_weights``,
         ``torque_limits``, ``min_normal_force``, ``joint_names``, ``linearization``,
-        ``internal_forces``, ``initial_torque``)."""
+        ``internal_forces``, ``initial_torque``, ``transmission`` (m × a: τ = T u, the
+        solve then returns actuator forces u), ``actuator_names``)."""
         d = {
             "grasp_matrix": np.asarray(grasp_matrix, dtype=float),
             "jacobian_transpose": np.asarray(jacobian_transpose, dtype=float),
@@ -300,6 +301,8 @@ def solve_batch(
     torque_limits=None,
     min_normal_force=None,
     joint_names: Optional[Sequence[str]] = None,
+    transmission=None,
+    actuator_names: Optional[Sequence[str]] = None,
     threads: Optional[int] = None,
     warm_start: bool = True,
     torque: Optional[np.ndarray] = None,
@@ -313,7 +316,10 @@ def solve_batch(
     and ``W[B,K,6]`` K of them (each grasp's model is built once and its wrenches are
     solved in order, each warm-started from the previous answer unless
     ``warm_start=False``). ``contacts``, the limits, weights and minimum normal forces
-    are shared by every grasp. ``threads`` defaults to one per core.
+    are shared by every grasp. ``threads`` defaults to one per core. A
+    ``transmission`` T (m × a, shared: an MJCF hand's moment arms do not depend on the
+    configuration) makes the outputs actuator forces u, ``torque[B,(K,)a]``, with the
+    weights and limits per actuator.
 
     As in ``mujoco.rollout``, the outputs ``torque``, ``objective``,
     ``wrench_residual`` (float64) and ``status`` (int8) may be passed preallocated
@@ -336,6 +342,13 @@ def solve_batch(
     else:
         raise ValueError(f"W: expected shape (B, 6) or (B, K, 6), got {W.shape}")
     B, K, m = G.shape[0], W3.shape[1], JT.shape[1]
+    if transmission is not None:
+        transmission = np.asarray(transmission, dtype=np.float64)
+        if transmission.ndim != 2 or transmission.shape[0] != m:
+            raise ValueError(
+                f"transmission: expected shape ({m}, a), one row per joint of JT, got {transmission.shape}"
+            )
+        m = transmission.shape[1]
     lead = (B,) if single else (B, K)
     torque = _out("torque", torque, lead + (m,), np.float64)
     objective = _out("objective", objective, lead, np.float64)
@@ -347,6 +360,8 @@ def solve_batch(
         "torque_limits": torque_limits,
         "min_normal_force": min_normal_force,
         "joint_names": None if joint_names is None else list(joint_names),
+        "transmission": None if transmission is None else transmission.tolist(),
+        "actuator_names": None if actuator_names is None else list(actuator_names),
         **_settings(backend, cones, sides, latitudes, sfce_spacing, internal_forces, paper_model),
     }
     if threads is None:

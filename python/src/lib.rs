@@ -255,6 +255,9 @@ struct ResultData {
     solve_time_us: f64,
     checks: Checks,
     joint_names: Option<Vec<String>>,
+    /// With a transmission: τ = T u per joint (`torque` holds u per actuator).
+    joint_torque: Option<Vec<f64>>,
+    actuator_names: Option<Vec<String>>,
     warnings: Vec<String>,
     backend: String,
     cones: String,
@@ -301,6 +304,11 @@ impl SolveResult {
                     torque_check: d.torque_check,
                 },
                 joint_names: names(p),
+                joint_torque: (ok && !s.joint_torque.is_empty()).then(|| s.joint_torque.clone()),
+                actuator_names: p
+                    .transmission
+                    .as_ref()
+                    .map(|_| (0..p.actuated()).map(|j| p.actuator_name(j)).collect()),
                 warnings: s.warnings.clone(),
                 backend: backend.into(),
                 cones: cones.into(),
@@ -381,6 +389,19 @@ impl SolveResult {
     #[getter]
     fn joint_names(&self) -> Option<Vec<String>> {
         self.data.joint_names.clone()
+    }
+
+    /// With a transmission (an MJCF hand, or `transmission` in the matrix form): the
+    /// joint torques τ = T u; `torque` then holds the actuator forces u.
+    #[getter]
+    fn joint_torque<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.data.joint_torque.clone().map(|t| t.into_pyarray(py))
+    }
+
+    /// With a transmission: one name per entry of `torque`.
+    #[getter]
+    fn actuator_names(&self) -> Option<Vec<String>> {
+        self.data.actuator_names.clone()
     }
 
     #[getter]
@@ -502,6 +523,9 @@ struct BatchSpec {
     torque_limits: Option<Vec<Option<f64>>>,
     min_normal_force: Option<serde_json::Value>,
     joint_names: Option<Vec<String>>,
+    /// T (joints × actuators), shared by every grasp: τ = T u.
+    transmission: Option<Vec<Vec<f64>>>,
+    actuator_names: Option<Vec<String>>,
     #[serde(flatten)]
     settings: Settings,
 }
@@ -655,6 +679,18 @@ fn solve_batch(
     let mut template =
         GraspProblem::new(Matrix::zeros(6, 0), Matrix::zeros(m, 0), [0.0; 6], contacts);
     template.joint_names = spec.joint_names.unwrap_or_default();
+    if let Some(t) = spec.transmission {
+        let cols = t.first().map_or(0, Vec::len);
+        if t.len() != m || t.iter().any(|r| r.len() != cols) {
+            return Err(invalid(format!(
+                "transmission: expected shape ({m}, a), one row per joint of JT"
+            )));
+        }
+        template.transmission = Some(grasp_torque::problem::Transmission {
+            matrix: Matrix::from_fn(m, cols, |i, j| t[i][j]),
+            actuator_names: spec.actuator_names.unwrap_or_default(),
+        });
+    }
     grasp_torque::file::Options {
         min_normal_force: spec.min_normal_force,
         torque_weights: spec.torque_weights,
@@ -667,6 +703,8 @@ fn solve_batch(
     if threads == 0 {
         return Err(invalid("threads: expected at least 1 worker thread, got 0"));
     }
+    // One torque per actuator with a transmission, else per joint.
+    let m = template.actuated();
     let out = Outputs {
         torque: contiguous_out("torque", &mut torque, &[b, k, m])?.as_mut_ptr(),
         objective: contiguous_out("objective", &mut objective, &[b, k])?.as_mut_ptr(),

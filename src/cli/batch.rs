@@ -384,7 +384,11 @@ fn error_record(line: usize, message: &str, format: BatchFormat) -> String {
 fn record(line: usize, k: usize, p: &GraspProblem, s: &Solution, format: BatchFormat) -> String {
     let ok = !s.torque.is_empty();
     let d = &s.diagnostics;
-    let names: Vec<String> = if p.joint_names.is_empty() {
+    // Names of the torques solved for: actuators with a transmission, else joints.
+    let actuated = p.transmission.is_some();
+    let names: Vec<String> = if actuated {
+        (0..p.actuated()).map(|j| p.actuator_name(j)).collect()
+    } else if p.joint_names.is_empty() {
         Vec::new()
     } else {
         (0..p.joints()).map(|j| p.joint_name(j)).collect()
@@ -420,7 +424,16 @@ fn record(line: usize, k: usize, p: &GraspProblem, s: &Solution, format: BatchFo
                     json!({"wrench": d.wrench_residual, "torque": d.torque_residual, "consistency": d.consistency_residual}),
                 );
             }
-            if !names.is_empty() {
+            if actuated {
+                // `torque` holds u per actuator; `joint_torque` τ = T u per joint.
+                if ok && !s.joint_torque.is_empty() {
+                    o.insert("joint_torque".into(), json!(s.joint_torque));
+                }
+                o.insert("actuator_names".into(), json!(names));
+                if !p.joint_names.is_empty() {
+                    o.insert("joint_names".into(), json!(p.joint_names));
+                }
+            } else if !names.is_empty() {
                 o.insert("joint_names".into(), json!(names));
             }
             o.insert("iterations".into(), json!(s.iterations));

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub(crate) struct HandArgs {
-    /// The robot description (URDF).
+    /// The robot description: a URDF, or an MJCF file (root element `<mujoco>`).
     urdf: PathBuf,
     /// Output format.
     #[arg(long, value_enum, default_value = "text")]
@@ -70,6 +70,14 @@ pub(crate) fn run(args: &HandArgs) -> Result<u8> {
                     "link": robot.links[*l],
                     "independent_joints": dedup(c.iter().map(|&j| leader(j).0)),
                 })).collect::<Vec<_>>(),
+                "sites": robot.sites.iter().map(|s| json!({"name": s.name, "link": robot.links[s.link]})).collect::<Vec<_>>(),
+                "actuators": robot.actuators.iter().map(|a| json!({
+                    "name": a.name,
+                    "type": a.kind,
+                    "moment": a.moment.iter().map(|&(j, m)| (joint(j).name.clone(), m)).collect::<std::collections::BTreeMap<_, _>>(),
+                    "limit": limit(a.limit),
+                    "limit_source": a.limit_source,
+                })).collect::<Vec<_>>(),
                 "warnings": robot.warnings,
             });
             outln!("{}", serde_json::to_string_pretty(&v)?);
@@ -121,6 +129,38 @@ pub(crate) fn run(args: &HandArgs) -> Result<u8> {
                         g(c.offset.abs(), 8)
                     );
                 }
+            }
+            if !robot.actuators.is_empty() {
+                outln!("\nactuators (τ = T u: moment arms on the joints; |u| ≤ limit)");
+                let width = robot
+                    .actuators
+                    .iter()
+                    .map(|a| a.name.chars().count())
+                    .max()
+                    .unwrap_or(0);
+                for a in &robot.actuators {
+                    let arms: Vec<String> = a
+                        .moment
+                        .iter()
+                        .map(|&(j, m)| format!("{}·{}", g(m, 6), joint(j).name))
+                        .collect();
+                    let lim = match a.limit {
+                        Some(l) => {
+                            format!("|u| ≤ {} ({:?})", g(l, 5), a.limit_source).to_lowercase()
+                        }
+                        None => "unlimited".into(),
+                    };
+                    outln!(
+                        "  {:<width$}  {:<11}  {}   {lim}",
+                        a.name,
+                        a.kind,
+                        arms.join(" + ")
+                    );
+                }
+            }
+            if !robot.sites.is_empty() {
+                let names: Vec<&str> = robot.sites.iter().map(|s| s.name.as_str()).collect();
+                outln!("\nsites ({}): {}", names.len(), names.join(", "));
             }
             outln!("\nchains (end link: the independent joints that move it, root first)");
             for (l, c) in &chains {

@@ -177,6 +177,7 @@ pub(crate) fn to_json(
 
 /// What a hand-form problem adds to the text report.
 fn hand_text(h: &grasp_torque::hand::HandReport) -> String {
+    use grasp_torque::urdf::LimitSource;
     use std::fmt::Write;
     let mut o = String::new();
     let _ = writeln!(o, "\nhand        {} (robot `{}`)", h.model, h.robot);
@@ -188,15 +189,24 @@ fn hand_text(h: &grasp_torque::hand::HandReport) -> String {
         );
     }
     let limits = match h.torque_limits {
-        "model" => "from each joint's <limit effort>",
-        "file" => "from the file",
-        _ => "none",
+        "model" if !h.actuator_limits.is_empty() => {
+            let from = |s: LimitSource| h.actuator_limits.iter().filter(|a| a.source == s).count();
+            format!(
+                "actuator force limits from the model: {} from forcerange, {} from ctrlrange × gain, {} none",
+                from(LimitSource::Forcerange),
+                from(LimitSource::Ctrlrange),
+                from(LimitSource::None)
+            )
+        }
+        "model" => "torque limits from each joint's <limit effort>".into(),
+        "file" => "limits from the file".into(),
+        _ => "no limits".into(),
     };
-    let _ = writeln!(o, "            torque limits {limits}");
+    let _ = writeln!(o, "            {limits}");
     if !h.unlimited_joints.is_empty() {
         let _ = writeln!(
             o,
-            "            no effort limit: {}",
+            "            unlimited: {}",
             h.unlimited_joints.join(", ")
         );
     }
@@ -228,8 +238,11 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
     };
     let _ = writeln!(
         o,
-        "model     {} joints, {} contacts, {cone_text}, {}",
-        qp.joints(),
+        "model     {}, {} contacts, {cone_text}, {}",
+        match &model.actuators {
+            Some(a) => format!("{} actuators driving {} joints", qp.joints(), a.joints()),
+            None => format!("{} joints", qp.joints()),
+        },
         qp.contacts.len(),
         match model.equilibrium {
             Equilibrium::Consistent => format!("{} consistency equalities", qp.equality_rows()),
@@ -281,7 +294,8 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
                 } else {
                     ""
                 };
-                format!("   |τ| ≤ {}{at}", g(l, 4))
+                let var = if model.actuators.is_some() { "u" } else { "τ" };
+                format!("   |{var}| ≤ {}{at}", g(l, 4))
             }
             _ => String::new(),
         };

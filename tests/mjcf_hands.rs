@@ -1,0 +1,202 @@
+//! MJCF hands in actuator space from the command line: the Shadow tripod, its
+//! unactuated distal joints, and named errors for malformed MJCF.
+
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn fixture(name: &str) -> String {
+    format!("{}/fixtures/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn json(out: &Output) -> serde_json::Value {
+    serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|_| panic!("{}", String::from_utf8_lossy(&out.stderr)))
+}
+
+fn numbers(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+#[test]
+fn shadow_tripod_is_held_in_actuator_space() {
+    let cones: &[&str] = if cfg!(feature = "clarabel") {
+        &["linear", "exact"]
+    } else {
+        &["linear"]
+    };
+    let mut sigma = Vec::new();
+    for &c in cones {
+        let out = run(&[
+            "solve",
+            &fixture("hands/shadow-tripod.json"),
+            "--cones",
+            c,
+            "--format",
+            "json",
+        ]);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v = json(&out);
+        assert_eq!(v["status"], "optimal", "{c}: {}", v["message"]);
+        let u = numbers(&v["torque"]);
+        let tau = numbers(&v["joint_torque"]);
+        let actuators = v["actuator_names"].as_array().unwrap();
+        let joints: Vec<&str> = v["joint_names"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_str().unwrap())
+            .collect();
+        assert_eq!(u.len(), 13);
+        assert_eq!(actuators.len(), 13);
+        assert_eq!(tau.len(), 15);
+        assert_eq!(joints.len(), 15);
+        // The distal joints have no actuator: no torque there.
+        let tmax = tau.iter().fold(0.0f64, |a, t| a.max(t.abs()));
+        for j in ["robot0:FFJ0", "robot0:MFJ0"] {
+            let k = joints.iter().position(|n| *n == j).unwrap();
+            assert!(tau[k].abs() <= 1e-7 * tmax, "{j}: {}", tau[k]);
+        }
+        // Forcerange limits, from the model, hold.
+        let limits = v["hand"]["actuator_limits"].as_array().unwrap();
+        for (ui, l) in u.iter().zip(limits) {
+            assert_eq!(l["source"], "forcerange");
+            assert!(ui.abs() <= l["limit"].as_f64().unwrap() * (1.0 + 1e-9));
+        }
+        let r = &v["residuals"];
+        assert!(
+            r["wrench"].as_f64().unwrap() <= 1e-7 && r["torque"].as_f64().unwrap() <= 1e-7,
+            "{r}"
+        );
+        sigma.push(v["objective"].as_f64().unwrap());
+    }
+    if sigma.len() == 2 {
+        // Inscribed cones are conservative: σ* ≤ σ(N).
+        assert!(sigma[1] <= sigma[0] * (1.0 + 1e-7), "{sigma:?}");
+    }
+    let text =
+        String::from_utf8_lossy(&run(&["solve", &fixture("hands/shadow-tripod.json")]).stdout)
+            .into_owned();
+    assert!(
+        text.contains("13 actuators driving 15 joints")
+            && text.contains("joint torques τ = T u")
+            && text.contains("|u| ≤ 0.7245"),
+        "{text}"
+    );
+}
+
+#[test]
+fn an_unactuated_direction_that_must_carry_torque_is_named() {
+    // The first finger presses with its pad (normal across the distal phalanx): its
+    // force has a moment about FFJ0, which no actuator can hold.
+    let mut p: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(fixture("hands/shadow-tripod.json")).unwrap(),
+    )
+    .unwrap();
+    p["hand"]["model"] = serde_json::json!(fixture("mjcf/shadow_hand/shadow_hand.xml"));
+    p["contacts"][1]["normal"] = serde_json::json!([0.0, -1.0, 0.0]);
+    p["contacts"][1]["frame"] = serde_json::json!("link");
+    let dir = std::env::temp_dir().join(format!("gt-mjcf-hands-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("pad.json");
+    std::fs::write(&path, p.to_string()).unwrap();
+    let out = run(&["solve", path.to_str().unwrap(), "--format", "json"]);
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json(&out);
+    assert_eq!(v["status"], "infeasible");
+    let msg = v["message"].as_str().unwrap_or_default().to_string() + &v["reason"].to_string();
+    assert!(
+        msg.contains("robot0:FFJ0") && msg.contains("underactuated"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn mjcf_listing_and_errors() {
+    let out = run(&["hand", &fixture("mjcf/shadow_hand/shadow_hand.xml")]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("robot0:A_FFJ1") && text.contains("|u| ≤ 0.7245 (forcerange)"),
+        "{text}"
+    );
+    let v = json(&run(&[
+        "hand",
+        &fixture("mjcf/test/tendon_finger.xml"),
+        "--format",
+        "json",
+    ]));
+    let a = v["actuators"].as_array().unwrap();
+    let t = a.iter().find(|x| x["name"] == "f1_tendon").unwrap();
+    assert!(
+        (t["moment"]["f1_mid"].as_f64().unwrap() - 0.018).abs() < 1e-15,
+        "{t}"
+    );
+    let dir = std::env::temp_dir().join(format!("gt-mjcf-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.xml");
+    std::fs::write(&bad, "<mujoco>\n<worldbody>\n<body name=\"a\"><joint/>\n<body name=\"b\"><joint type=\"ball\"/></body></body>\n</worldbody></mujoco>").unwrap();
+    let out = run(&["hand", bad.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.xml") && err.contains("line 4") && err.contains("ball joint"),
+        "{err}"
+    );
+}
+
+#[test]
+fn batch_lines_with_an_mjcf_hand_report_actuators_and_joints() {
+    let mut p: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(fixture("hands/shadow-tripod.json")).unwrap(),
+    )
+    .unwrap();
+    p["hand"]["model"] = serde_json::json!(fixture("mjcf/shadow_hand/shadow_hand.xml"));
+    p["wrenches"] = serde_json::json!([[0, 0, -0.4905, 0, 0, 0], [0.05, 0, -0.4905, 0, 0, 0]]);
+    let dir = std::env::temp_dir().join(format!("gt-mjcf-batch-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("in.jsonl");
+    std::fs::write(&path, format!("{p}\n{p}\n")).unwrap();
+    let out = run(&["batch", path.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    let records: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(records.len(), 4);
+    let single = json(&run(&[
+        "solve",
+        &fixture("hands/shadow-tripod.json"),
+        "--format",
+        "json",
+    ]));
+    assert_eq!(records[0]["objective"], single["objective"]);
+    for r in &records {
+        assert_eq!(
+            r["actuator_names"].as_array().unwrap().len(),
+            r["torque"].as_array().map_or(13, Vec::len)
+        );
+        if r["status"] == "optimal" {
+            assert_eq!(r["joint_torque"].as_array().unwrap().len(), 15);
+        }
+    }
+}
