@@ -17,9 +17,10 @@
 //!   tendon's coefficients. Gains and biases do not enter statics.
 //!
 //! A `free` joint on a body directly under `<worldbody>` (a floating hand or object) is
-//! held fixed, and that body's frame becomes the reference frame; `free` and `ball`
-//! joints inside the tree, `<frame>`, `<composite>`, `<flexcomp>`, `<replicate>`,
-//! `<attach>` and `<equality><connect>` change the kinematics and are errors. Meshes,
+//! held fixed, and that body's frame becomes the reference frame; `<frame>` moves the
+//! bodies and sites it holds. `free` and `ball` joints inside the tree, `<composite>`,
+//! `<flexcomp>`, `<replicate>`, `<attach>` and `<equality><connect>` change the
+//! kinematics and are errors. Meshes,
 //! geoms, textures and assets are never opened; other elements are ignored, with one
 //! warning per element name.
 
@@ -557,12 +558,16 @@ impl Ctx<'_> {
         }
     }
 
+    /// A body under `parent`, whose frame is `offset · (pos, orientation)` (`offset`
+    /// from enclosing `<frame>` elements).
+    #[allow(clippy::too_many_arguments)]
     fn body(
         &self,
         t: &mut Tree,
         e: &El,
         parent: usize,
         childclass: &str,
+        offset: Isometry3<f64>,
         top: bool,
     ) -> Result<(), ProblemError> {
         if t.links.len() >= MAX_LINKS {
@@ -575,7 +580,7 @@ impl Ctx<'_> {
             .attr("name")
             .map_or_else(|| format!("body at line {}", e.line), str::to_string);
         let inner = e.attr("childclass").unwrap_or(childclass).to_string();
-        let mut local = v.frame(self.c)?;
+        let mut local = offset * v.frame(self.c)?;
         let joints: Vec<&El> = e
             .children
             .iter()
@@ -669,12 +674,32 @@ impl Ctx<'_> {
             0.0,
             e.line,
         );
+        self.children(t, e, link, &inner, Isometry3::identity(), false)
+    }
+
+    /// The bodies, sites and frames in `e` (a body, `<worldbody>` or `<frame>`), on
+    /// `link`, moved by `offset`.
+    fn children(
+        &self,
+        t: &mut Tree,
+        e: &El,
+        link: usize,
+        childclass: &str,
+        offset: Isometry3<f64>,
+        top: bool,
+    ) -> Result<(), ProblemError> {
         for c in &e.children {
             match c.name.as_str() {
-                "body" => self.body(t, c, link, &inner, false)?,
+                "body" => self.body(t, c, link, childclass, offset, top)?,
                 "joint" | "freejoint" | "geom" | "inertial" | "camera" | "light" => {}
+                "frame" => {
+                    // A frame moves what it holds and may set their class.
+                    let fv = self.view(c, "frame", childclass);
+                    let inner = c.attr("childclass").unwrap_or(childclass);
+                    self.children(t, c, link, inner, offset * fv.frame(self.c)?, top)?;
+                }
                 "site" => {
-                    let sv = self.view(c, "site", &inner);
+                    let sv = self.view(c, "site", childclass);
                     let frame = match sv.fixed::<6>("fromto")? {
                         Some(ft) => {
                             let (a, b) = (
@@ -697,11 +722,11 @@ impl Ctx<'_> {
                             .attr("name")
                             .map_or_else(|| format!("site at line {}", c.line), str::to_string),
                         link,
-                        frame,
+                        frame: offset * frame,
                         line: c.line,
                     });
                 }
-                "frame" | "composite" | "flexcomp" | "replicate" | "attach" => {
+                "composite" | "flexcomp" | "replicate" | "attach" => {
                     return Err(self
                         .r
                         .err(c, "changes the kinematic tree and is not supported here"))
@@ -792,29 +817,7 @@ impl Robot {
         let world = t.add_link("world".into(), 0);
         t.body_link.insert("world".into(), world);
         for wb in top.iter().filter(|e| e.name == "worldbody") {
-            for e in &wb.children {
-                match e.name.as_str() {
-                    "body" => ctx.body(&mut t, e, world, "main", true)?,
-                    "site" => {
-                        let sv = ctx.view(e, "site", "main");
-                        t.sites.push(Site {
-                            name: e
-                                .attr("name")
-                                .map_or_else(|| format!("site at line {}", e.line), str::to_string),
-                            link: world,
-                            frame: sv.frame(c)?,
-                            line: e.line,
-                        });
-                    }
-                    "frame" | "composite" | "flexcomp" | "replicate" | "attach" => {
-                        return Err(r.err(e, "changes the kinematic tree and is not supported here"))
-                    }
-                    "geom" | "camera" | "light" => {}
-                    other => {
-                        t.ignored.insert(other.to_string());
-                    }
-                }
-            }
+            ctx.children(&mut t, wb, world, "main", Isometry3::identity(), true)?;
         }
         let joint_index: HashMap<String, usize> = t
             .joints

@@ -115,7 +115,7 @@ fn malformed_mjcf_is_a_named_error() {
         (body("<joint axis=\"0 0 0\"/>"), "zero axis"),
         (body("<joint pos=\"1 nan 0\"/>"), "finite numbers"),
         (body("<joint type=\"spring\"/>"), "unknown joint type"),
-        (body("<frame/>"), "changes the kinematic tree"),
+        (body("<replicate count=\"2\"/>"), "changes the kinematic tree"),
         (body("<site quat=\"0 0 0 0\"/>"), "zero quaternion"),
         (body("<site quat=\"1 0 0 0\" euler=\"0 0 0\"/>"), "more than one orientation"),
         ("<mujoco><compiler angle=\"grad\"/></mujoco>".to_string(), "degree or radian"),
