@@ -164,3 +164,76 @@ fn unknown_elements_warn_once_and_degrees_are_the_default() {
     let b = r.link("b").unwrap();
     assert!((pose.links[b].rotation.angle()).abs() < 1e-15);
 }
+
+/// Mutated and truncated MJCF loads or fails with a named error, never a panic; what
+/// loads also builds a hand problem or fails with a named error.
+#[test]
+fn mutated_mjcf_never_panics() {
+    let base = std::fs::read_to_string(repo("fixtures/mjcf/test/tendon_finger.xml")).unwrap();
+    let bytes = base.as_bytes();
+    let mut state = 12345u64;
+    let mut next = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let pieces: [&str; 14] = [
+        "<",
+        ">",
+        "\"",
+        "nan",
+        "-1e999",
+        "0 0 0",
+        "<joint type=\"ball\"/>",
+        "</body>",
+        "<equality><joint joint1=\"f2_mid\" joint2=\"f2_flex\"/></equality>",
+        "class=\"nope\"",
+        "tendon=\"f1_curl\"",
+        "gear=\"0\"",
+        "&amp;",
+        "\u{0}",
+    ];
+    let (mut ok, mut rejected) = (0, 0);
+    for _ in 0..600 {
+        let mut text = bytes.to_vec();
+        for _ in 0..1 + (next() * 3.0) as usize {
+            let at = (next() * text.len() as f64) as usize;
+            match (next() * 3.0) as usize {
+                0 => text.truncate(at),
+                1 => {
+                    let p = pieces[(next() * pieces.len() as f64) as usize];
+                    text.splice(at..at, p.bytes());
+                }
+                _ => {
+                    let end = (at + (next() * 40.0) as usize).min(text.len());
+                    text.drain(at..end);
+                }
+            }
+        }
+        let text = String::from_utf8_lossy(&text);
+        match Robot::parse_mjcf(&text, "mutated.xml", None) {
+            Ok(robot) => {
+                ok += 1;
+                let file: HandFile = serde_json::from_value(serde_json::json!({
+                    "hand": {"model": "mutated.xml"},
+                    "contacts": [
+                        {"site": "f1_tip_site", "model": "pcwf", "mu": 0.5},
+                        {"site": "th_tip_site", "model": "pcwf", "mu": 0.5}
+                    ],
+                    "wrench": [0, 0, -1, 0, 0, 0],
+                    "torque_limits": "model"
+                }))
+                .unwrap();
+                if let Ok(h) = file.build(&robot) {
+                    let _ = grasp_core::GraspModel::new(&h.problem, &Default::default());
+                }
+            }
+            Err(e) => {
+                assert!(e.to_string().starts_with("mutated.xml: "), "{e}");
+                rejected += 1;
+            }
+        }
+    }
+    assert!(ok > 0 && rejected > 0, "{ok} loaded, {rejected} rejected");
+}
