@@ -3,32 +3,13 @@
 //! the problem's own matrices), and rescaling an actuator rescales its force.
 #![cfg(feature = "clarabel")]
 
-use grasp_testkit::{synthetic_grasp, SynthSpec};
+use grasp_testkit::{synthetic_grasp, Rng, SynthSpec};
 use grasp_torque::matrix::{norm_inf, Matrix};
 use grasp_torque::problem::Transmission;
 use grasp_torque::{
     solve, Backend, Cones, GraspProblem, Reason, Solution, SolverConfig, Status, WarmStart,
 };
 use proptest::prelude::*;
-
-/// SplitMix64: enough randomness for transmissions, no dependency.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-}
 
 fn run(p: &GraspProblem, backend: Backend, cones: Cones) -> Solution {
     let config = SolverConfig {
@@ -54,11 +35,11 @@ fn random_transmission(seed: u64, m: usize, a: usize) -> Matrix {
     loop {
         let mut t = Matrix::zeros(m, a);
         for j in 0..a {
-            let first = if a == m { j } else { rng.below(m) };
-            let sign = if rng.below(10) < 3 { -1.0 } else { 1.0 };
+            let first = if a == m { j } else { rng.int(0, m - 1) };
+            let sign = if rng.int(0, 9) < 3 { -1.0 } else { 1.0 };
             t[(first, j)] = rng.uniform(0.2, 3.0) * sign;
-            for _ in 0..rng.below(3) {
-                let i = rng.below(m);
+            for _ in 0..rng.int(0, 2) {
+                let i = rng.int(0, m - 1);
                 t[(i, j)] += rng.uniform(-1.0, 1.0);
             }
         }
