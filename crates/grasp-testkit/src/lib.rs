@@ -48,8 +48,8 @@ impl Default for SynthSpec {
 pub struct Rng(pub u64);
 
 impl Rng {
-    /// The next 64 random bits.
-    pub fn next(&mut self) -> u64 {
+    /// 64 random bits.
+    pub fn bits(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
@@ -58,11 +58,11 @@ impl Rng {
     }
     /// Uniform in `[lo, hi)`.
     pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * (self.next() >> 11) as f64 / (1u64 << 53) as f64
+        lo + (hi - lo) * (self.bits() >> 11) as f64 / (1u64 << 53) as f64
     }
     /// Uniform in `lo..=hi`.
     pub fn int(&mut self, lo: usize, hi: usize) -> usize {
-        lo + (self.next() % (hi - lo + 1) as u64) as usize
+        lo + (self.bits() % (hi - lo + 1) as u64) as usize
     }
 }
 
