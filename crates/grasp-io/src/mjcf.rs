@@ -25,7 +25,8 @@
 //! warning per element name.
 
 use crate::urdf::{
-    nearest, Actuator, Joint, JointKind, LimitSource, Robot, Site, MAX_DEPTH, MAX_LINKS,
+    line_at, nearest, newline_offsets, Actuator, Joint, JointKind, LimitSource, Robot, Site,
+    MAX_DEPTH, MAX_LINKS,
 };
 use grasp_core::error::ProblemError;
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
@@ -82,11 +83,6 @@ impl Reader {
         error(&self.files[e.file], self.at(e), message)
     }
 
-    fn load(&mut self, path: &Path, depth: usize) -> Result<Vec<El>, ProblemError> {
-        let text = crate::file::read_limited(path)?;
-        self.parse(&text, path.display().to_string(), path.parent(), depth)
-    }
-
     /// The children of the document's root element, includes expanded.
     fn parse(
         &mut self,
@@ -116,9 +112,10 @@ impl Reader {
         if file == 0 {
             self.model = root.attribute("model").map(str::to_string);
         }
+        let newlines = newline_offsets(text);
         let mut out = Vec::new();
         for c in root.children().filter(|c| c.is_element()) {
-            self.convert(&doc, c, file, dir, depth, 1, &mut out)?;
+            self.convert(&newlines, c, file, dir, depth, 1, &mut out)?;
         }
         Ok(out)
     }
@@ -126,7 +123,7 @@ impl Reader {
     #[allow(clippy::too_many_arguments)]
     fn convert(
         &mut self,
-        doc: &roxmltree::Document,
+        newlines: &[usize],
         node: roxmltree::Node,
         file: usize,
         dir: Option<&Path>,
@@ -134,7 +131,7 @@ impl Reader {
         depth: usize,
         out: &mut Vec<El>,
     ) -> Result<(), ProblemError> {
-        let line = doc.text_pos_at(node.range().start).row;
+        let line = line_at(newlines, node.range().start);
         let name = node.tag_name().name().to_string();
         if depth > MAX_DEPTH {
             return Err(error(
@@ -171,14 +168,20 @@ impl Reader {
                 Some(p) if p.exists() => p,
                 _ => self.main_dir.join(target),
             };
-            let children = self.load(&path, include_depth + 1).map_err(|e| match e {
-                ProblemError::Io { path, error: io } => error(
-                    &self.files[file],
-                    format!("<include file=\"{target}\"> (line {line})"),
-                    format!("cannot read {path}: {io}"),
-                ),
-                other => other,
+            let at = format!("<include file=\"{target}\"> (line {line})");
+            let text = crate::file::read_limited(&path).map_err(|e| {
+                let why = match e {
+                    ProblemError::Io { path, error: io } => format!("cannot read {path}: {io}"),
+                    other => format!("cannot read {}: {other}", path.display()),
+                };
+                error(&self.files[file], &at, why)
             })?;
+            let children = self.parse(
+                &text,
+                path.display().to_string(),
+                path.parent(),
+                include_depth + 1,
+            )?;
             out.extend(children);
             return Ok(());
         }
@@ -206,7 +209,15 @@ impl Reader {
                 | "light"
         ) {
             for c in node.children().filter(|c| c.is_element()) {
-                self.convert(doc, c, file, dir, include_depth, depth + 1, &mut children)?;
+                self.convert(
+                    newlines,
+                    c,
+                    file,
+                    dir,
+                    include_depth,
+                    depth + 1,
+                    &mut children,
+                )?;
             }
         }
         out.push(El {

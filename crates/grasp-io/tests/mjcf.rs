@@ -237,3 +237,23 @@ fn mutated_mjcf_never_panics() {
     }
     assert!(ok > 0 && rejected > 0, "{ok} loaded, {rejected} rejected");
 }
+
+/// Thousands of bodies load, and an error at the end names its line (line numbers are
+/// found by binary search, not by rescanning the text per element).
+#[test]
+fn large_models_load_and_name_late_lines() {
+    let mut text = String::from("<mujoco>\n<worldbody>\n");
+    for i in 0..3000 {
+        text.push_str(&format!(
+            "<body name=\"b{i}\">\n<joint name=\"j{i}\"/>\n</body>\n"
+        ));
+    }
+    let ok = format!("{text}</worldbody>\n</mujoco>\n");
+    let r = Robot::parse_mjcf(&ok, "big.xml", None).unwrap();
+    assert_eq!(r.independent.len(), 3000);
+    let bad = format!("{text}<body><joint axis=\"0 0 0\"/></body>\n</worldbody>\n</mujoco>\n");
+    let e = Robot::parse_mjcf(&bad, "big.xml", None)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("line 9003") && e.contains("zero axis"), "{e}");
+}
