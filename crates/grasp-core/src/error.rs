@@ -57,10 +57,17 @@ impl ProblemError {
         expected: impl Into<String>,
         found: impl std::fmt::Display,
     ) -> Self {
+        let mut found = found.to_string();
+        // f64's Display writes 1e300 with 300 digits: a long number reads better as 1e300.
+        if found.len() > 24 {
+            if let Ok(v) = found.parse::<f64>() {
+                found = format!("{v:e}");
+            }
+        }
         Self::Invalid {
             field: field.into(),
             expected: expected.into(),
-            found: found.to_string(),
+            found,
         }
     }
 }

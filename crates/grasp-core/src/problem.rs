@@ -436,6 +436,21 @@ fn validate_transmission(t: &Transmission, m: usize) -> Result<(), ProblemError>
         ));
     }
     bounded_matrix("transmission", &t.matrix)?;
+    // A moment arm below 1e-12 of the unit would put u beyond any force within the domain.
+    for i in 0..m {
+        for (j, &v) in t.matrix.row(i).iter().enumerate() {
+            if v != 0.0 && v.abs() < 1.0 / MAX_MAGNITUDE {
+                return Err(ProblemError::invalid(
+                    format!("transmission[{i}][{j}]"),
+                    format!(
+                        "0, or a magnitude from {:e} to {MAX_MAGNITUDE:e}",
+                        1.0 / MAX_MAGNITUDE
+                    ),
+                    v,
+                ));
+            }
+        }
+    }
     for j in 0..a {
         if (0..m).all(|i| t.matrix[(i, j)] == 0.0) {
             return Err(ProblemError::invalid(
