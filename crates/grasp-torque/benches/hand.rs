@@ -1,5 +1,5 @@
-//! The hand form: parsing a URDF, and building G and Jᵀ from the parsed robot for a new
-//! grasp (forward kinematics, contact frames, mimic coupling, validation), which a
+//! The hand form: parsing a URDF or MJCF, and building G, Jᵀ (and T) from the parsed
+//! robot for a new grasp (forward kinematics, contact frames, couplings, validation), which a
 //! planner that poses millions of grasps of one hand pays per grasp. The grasp model
 //! and the solve that follow are timed beside it for scale.
 //!
@@ -16,17 +16,18 @@ fn hand(c: &mut Criterion) {
     for (name, file) in [
         ("allegro-pinch", "hands/allegro-pinch.json"),
         ("ability-tripod", "hands/ability-tripod.json"),
+        ("shadow-tripod", "hands/shadow-tripod.json"),
     ] {
         let path = Path::new(ROOT).join(file);
         let spec: HandFile =
             serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
         let urdf = path.parent().unwrap().join(&spec.hand.model);
-        let text = std::fs::read_to_string(&urdf).unwrap();
         let mut g = c.benchmark_group(name);
-        g.bench_function("parse URDF", |b| {
-            b.iter(|| Robot::parse(black_box(&text), "hand.urdf").unwrap())
+        // Robot::load reads the file (and an MJCF's includes) each time, as a user does.
+        g.bench_function("parse the robot", |b| {
+            b.iter(|| Robot::load(black_box(&urdf)).unwrap())
         });
-        let robot = Robot::parse(&text, "hand.urdf").unwrap();
+        let robot = Robot::load(&urdf).unwrap();
         g.bench_function("build G and Jᵀ", |b| {
             b.iter(|| spec.build(black_box(&robot)).unwrap())
         });
