@@ -371,9 +371,17 @@ fn bad_flags_are_usage_errors() {
     let p = fixture("paper-example.json");
     assert_rejected(&run(&["solve", &p, "--sides", "2"]), "--sides");
     assert_rejected(&run(&["solve", &p, "--backend", "cplex"]), "--backend");
-    // The native backend has no exact cones; the error names one that has.
-    let out = run(&["solve", &p, "--backend", "active-set", "--cones", "exact"]);
-    assert_rejected(&out, "--cones exact");
+    // The native backend does not optimise free internal forces; the error names one
+    // that does.
+    let out = run(&[
+        "solve",
+        &p,
+        "--backend",
+        "active-set",
+        "--internal-forces",
+        "free",
+    ]);
+    assert_rejected(&out, "free internal forces");
     if cfg!(feature = "clarabel") {
         assert!(String::from_utf8_lossy(&out.stderr).contains("clarabel"));
     }

@@ -1,5 +1,6 @@
 //! `grasp-torque compare`: every compiled backend on the linearised problem, and
-//! Clarabel on the exact cones, with a verdict.
+//! every compiled exact-cone backend (native and Clarabel) on the exact cones, with a
+//! verdict.
 
 use super::format::{g, micros};
 use super::{load, Format};
@@ -165,6 +166,32 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
             }
         }
     }
+    // The exact backends (native and Clarabel) must agree with each other.
+    let exact: Vec<&Run> = runs.iter().filter(|r| r.cones == Cones::Exact).collect();
+    if let Some(first) = exact.first() {
+        for r in &exact[1..] {
+            let (a, b) = (&first.solution, &r.solution);
+            if a.status != b.status {
+                problems.push(format!(
+                    "exact cones: {} says {} but {} says {}",
+                    r.backend, b.status, first.backend, a.status
+                ));
+            } else if a.is_optimal() {
+                let tol = sigma_tolerance(first.backend, a).max(sigma_tolerance(r.backend, b));
+                let rel = (a.objective - b.objective).abs()
+                    / a.objective
+                        .abs()
+                        .max(b.objective.abs())
+                        .max(f64::MIN_POSITIVE);
+                if rel > tol {
+                    problems.push(format!(
+                        "exact cones: {}'s σ* differs from {}'s by {rel:.2e} relative (tolerance {tol:.0e})",
+                        r.backend, first.backend
+                    ));
+                }
+            }
+        }
+    }
     let agree = problems.is_empty();
     match args.format {
         Format::Json => {
@@ -248,7 +275,7 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
             }
             outln!();
             if agree {
-                outln!("verdict: agree (linearised backends within their tolerances; exact σ* ≤ every linearised σ)");
+                outln!("verdict: agree (linearised backends within their tolerances; exact backends agree; exact σ* ≤ every linearised σ)");
             } else {
                 outln!("verdict: DISAGREE");
                 for d in &problems {

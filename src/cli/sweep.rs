@@ -133,6 +133,8 @@ fn to_json(s: &Sweep) -> serde_json::Value {
     json!({
         "exact_objective": s.exact_objective,
         "exact_time_us": s.exact_time_us,
+        "exact_backend": s.exact_backend.map(|b| b.name()),
+        "exact_cross_check": s.exact_cross_check,
         "repeats": s.repeats,
         "rows": s.rows.iter().map(|r| json!({
             "sides": r.sides,
@@ -172,9 +174,18 @@ fn write_csv(path: &Path, s: &Sweep) -> Result<()> {
 
 fn print_text(problem: &Path, s: &Sweep, sfce: bool) -> Result<()> {
     outln!("problem {}", problem.display());
-    match (s.exact_objective, s.exact_time_us) {
-        (Some(e), Some(t)) => outln!("exact cones (clarabel): σ* = {}  ({:.1} µs)", g(e, 10), t),
-        _ => outln!("exact cones: unavailable (clarabel not compiled in, or not optimal)"),
+    match (s.exact_objective, s.exact_time_us, s.exact_backend) {
+        (Some(e), Some(t), Some(b)) => {
+            outln!("exact cones ({b}): σ* = {}  ({:.1} µs)", g(e, 10), t);
+            if let Some(c) = s.exact_cross_check {
+                let rel = (c - e).abs() / e.abs().max(c.abs()).max(f64::MIN_POSITIVE);
+                outln!(
+                    "  cross-check (clarabel): σ* = {}  (relative difference {rel:.1e})",
+                    g(c, 10)
+                );
+            }
+        }
+        _ => outln!("exact cones: unavailable (no exact backend compiled in, or not optimal)"),
     }
     outln!(
         "gap = (σ(N) − σ*)/σ*, relative; time: median of {} solves per row\n",

@@ -30,7 +30,10 @@ use grasp_core::{
     TorqueSolver, WarmStart,
 };
 
+mod exact;
 mod factor;
+mod ipm;
+pub use exact::{ExactSolver, CERTIFICATE_TOLERANCE};
 use factor::Factor;
 
 /// How a cold solve finds its first feasible point (Step 1).
@@ -160,7 +163,7 @@ pub enum BuildError {
 
 /// What the native backend supports.
 pub const CAPABILITIES: Capabilities = Capabilities {
-    exact_cones: false,
+    exact_cones: true,
     free_internal_forces: false,
     warm_key_set: true,
     warm_torque: true,

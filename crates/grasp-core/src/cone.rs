@@ -100,6 +100,44 @@ pub struct InscribedCone {
     pub vertices: Vec<Vec<f64>>,
 }
 
+/// A polyhedral cone that contains the exact cone of `model`: the inscribed cone at
+/// `lin` widened by its inradius ratio r (the largest cone of the same shape inside it
+/// has friction coefficients `r·mu`, `r·mu_torsion`), so that its faces touch the exact
+/// cone. A problem infeasible with these cones is infeasible with the exact ones.
+pub fn circumscribed_cone(model: &ContactModel, lin: &Linearization) -> InscribedCone {
+    let inner = inscribed_cone(model, lin);
+    // Face rows read fz − (a·fx + b·fy + c·mz) ≥ 0; in coordinates normalised by the
+    // friction coefficients a round (PCwF, SFCe) cone of ratio r is inside iff
+    // r·‖(a·mu, b·mu, c·mu_torsion)‖ ≤ 1. For SFCl the tangential part decides (the
+    // torsional part is linear already): widening both coefficients by 1/r contains it.
+    let (mu, mt, torsion) = match *model {
+        ContactModel::Fpc => return inner,
+        ContactModel::Pcwf { mu } => (mu, 0.0, false),
+        ContactModel::SfcLinear { mu, mu_torsion } => (mu, mu_torsion, false),
+        ContactModel::SfcElliptic { mu, mu_torsion } => (mu, mu_torsion, true),
+    };
+    let rows = inner.faces.nrows();
+    let mut r = f64::INFINITY;
+    for k in 0..rows - 1 {
+        let row = inner.faces.row(k);
+        let t = if torsion { row[3] * mt } else { 0.0 };
+        let size = ((row[0] * mu).powi(2) + (row[1] * mu).powi(2) + t * t).sqrt();
+        r = r.min(1.0 / size);
+    }
+    let wide = match *model {
+        ContactModel::Pcwf { .. } => ContactModel::Pcwf { mu: mu / r },
+        ContactModel::SfcLinear { .. } => ContactModel::SfcLinear {
+            mu: mu / r,
+            mu_torsion: mt / r,
+        },
+        _ => ContactModel::SfcElliptic {
+            mu: mu / r,
+            mu_torsion: mt / r,
+        },
+    };
+    inscribed_cone(&wide, lin)
+}
+
 /// Builds the inscribed cone of `model` (assumed validated) at linearisation `lin`.
 ///
 /// Row order follows the paper's eq. 50 (see `shared/reference/README.md`, item 4):
@@ -273,6 +311,76 @@ mod tests {
                     assert_eq!(cone.faces.nrows(), l.rows_for(&m));
                     assert_eq!(cone.faces.ncols(), m.dim());
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn circumscribed_cones_contain_the_exact_cone_and_touch_it() {
+        let models = [
+            ContactModel::Pcwf { mu: 0.7 },
+            ContactModel::SfcLinear {
+                mu: 0.5,
+                mu_torsion: 0.004,
+            },
+            ContactModel::SfcElliptic {
+                mu: 0.9,
+                mu_torsion: 0.02,
+            },
+        ];
+        for m in models {
+            for (sides, latitudes) in [(3, 1), (8, 2), (13, 3)] {
+                let lin = Linearization {
+                    sides,
+                    latitudes,
+                    ..Default::default()
+                };
+                let cone = circumscribed_cone(&m, &lin);
+                // Points on the exact cone's surface at fz = 1, over a fine grid.
+                let mut tightest = f64::INFINITY;
+                for i in 0..400 {
+                    let th = 2.0 * PI * i as f64 / 400.0;
+                    for j in 0..=20 {
+                        let t = -1.0 + 2.0 * j as f64 / 20.0;
+                        let f = match m {
+                            ContactModel::Pcwf { mu } => vec![mu * th.cos(), mu * th.sin(), 1.0],
+                            ContactModel::SfcLinear { mu, mu_torsion } => {
+                                let r = mu * (1.0 - t.abs());
+                                vec![r * th.cos(), r * th.sin(), 1.0, mu_torsion * t]
+                            }
+                            ContactModel::SfcElliptic { mu, mu_torsion } => {
+                                let r = mu * (1.0 - t * t).sqrt();
+                                vec![r * th.cos(), r * th.sin(), 1.0, mu_torsion * t]
+                            }
+                            ContactModel::Fpc => unreachable!(),
+                        };
+                        let least = (0..cone.faces.nrows())
+                            .map(|k| crate::matrix::dot(cone.faces.row(k), &f))
+                            .fold(f64::INFINITY, f64::min);
+                        assert!(least >= -1e-12, "{m:?} N={sides}: {f:?} outside ({least})");
+                        tightest = tightest.min(least);
+                    }
+                }
+                assert!(
+                    tightest < 2e-2,
+                    "{m:?} N={sides}: far from the cone ({tightest})"
+                );
+                // Touching: the largest face normal, in coordinates normalised by the
+                // friction coefficients, has length 1 (the inradius ratio is 1).
+                let (mu, mt) = match m {
+                    ContactModel::Pcwf { mu } => (mu, 0.0),
+                    ContactModel::SfcLinear { mu, .. } => (mu, 0.0),
+                    ContactModel::SfcElliptic { mu, mu_torsion } => (mu, mu_torsion),
+                    ContactModel::Fpc => unreachable!(),
+                };
+                let widest = (0..cone.faces.nrows() - 1)
+                    .map(|k| {
+                        let r = cone.faces.row(k);
+                        let t = if r.len() > 3 { r[3] * mt } else { 0.0 };
+                        ((r[0] * mu).powi(2) + (r[1] * mu).powi(2) + t * t).sqrt()
+                    })
+                    .fold(0.0, f64::max);
+                assert!((widest - 1.0).abs() < 1e-12, "{m:?} N={sides}: {widest}");
             }
         }
     }

@@ -9,6 +9,7 @@
 //! Constraints".
 
 pub mod cone;
+pub mod conic;
 pub mod contact;
 pub mod error;
 pub mod linalg;
@@ -18,7 +19,8 @@ pub mod problem;
 pub mod qp;
 pub mod solver;
 
-pub use cone::{inscribed_cone, InscribedCone, Linearization, SfceSpacing};
+pub use cone::{circumscribed_cone, inscribed_cone, InscribedCone, Linearization, SfceSpacing};
+pub use conic::{Certificate, ConeKind, ConicForm};
 pub use contact::ContactModel;
 pub use error::{ModelError, ProblemError};
 pub use matrix::Matrix;

@@ -100,6 +100,14 @@ pub enum Reason {
         /// What the solver found.
         cause: Box<Reason>,
     },
+    /// Even the circumscribed polyhedral cones, which contain the exact cones, admit
+    /// no torque: a certificate that the exact problem is infeasible.
+    OuterApproximation {
+        /// Sides N of the circumscribed polygons.
+        sides: usize,
+        /// Why the circumscribed problem is infeasible.
+        cause: Box<Reason>,
+    },
     /// Backend-specific explanation.
     Backend {
         /// The backend's name.
@@ -136,6 +144,10 @@ impl fmt::Display for Reason {
                 f,
                 "{cause}; the hand is underactuated: Jᵀ f must lie in the range of the transmission, and no actuator produces joint torque along {}",
                 unactuated.join("; ")
+            ),
+            Reason::OuterApproximation { sides, cause } => write!(
+                f,
+                "even the circumscribed polyhedral cones (N = {sides}), which contain the exact cones, admit no torque: {cause}"
             ),
             Reason::Backend { backend, message } => write!(f, "{backend}: {message}"),
         }
@@ -221,6 +233,11 @@ pub struct Solution {
     pub objective: f64,
     /// Iterations of the backend.
     pub iterations: usize,
+    /// Which of the backend's methods produced the answer, when it has several: the
+    /// native exact-cone solver's `newton` (active-set Newton from the linearised
+    /// optimum) or `interior_point` (its fallback).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub method: Option<&'static str>,
     /// The final key constraint set: linear rows active at τ, when the backend has one
     /// (indices into the rows of [`TorqueQp`]).
     pub active_set: Option<Vec<usize>>,
@@ -356,6 +373,7 @@ pub fn solve_into(
     out.reason = None;
     out.multipliers.clear();
     out.internal_forces.clear();
+    out.method = None;
     let residual = qp.model.unreachable_residual(wrench);
     if residual > qp.model.unreachable_tolerance(wrench) {
         out.status = Status::Infeasible;

@@ -12,7 +12,8 @@ use std::sync::Arc;
 /// The QP backends. Each is compiled in through the cargo feature of the same name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Backend {
-    /// The paper's key-constraint-set method (crate `grasp-active-set`), linearised cones.
+    /// The paper's key-constraint-set method (crate `grasp-active-set`) for linearised
+    /// cones, and its exact-cone solver for exact ones.
     ActiveSet,
     /// Clarabel's interior-point method (crate `grasp-clarabel`), linearised or exact cones.
     Clarabel,
@@ -343,6 +344,10 @@ impl SolverConfig {
     pub fn build(&self, qp: TorqueQp) -> Result<Box<dyn TorqueSolver>, BackendError> {
         match self.backend_for(&qp)? {
             #[cfg(feature = "active-set")]
+            Backend::ActiveSet if qp.constraints.has_exact() => Ok(Box::new(
+                grasp_active_set::ExactSolver::new(qp, self.active_set)?,
+            )),
+            #[cfg(feature = "active-set")]
             Backend::ActiveSet => Ok(Box::new(grasp_active_set::ActiveSetSolver::new(
                 qp,
                 self.active_set,
@@ -398,18 +403,32 @@ mod tests {
 
     #[test]
     fn unsupported_cones_list_the_supported_pairs() {
+        // OSQP has no exact cones; the native backend and Clarabel have.
+        if Backend::Osqp.is_compiled() {
+            let config = SolverConfig {
+                backend: Some(Backend::Osqp),
+                cones: Cones::Exact,
+                ..Default::default()
+            };
+            let err = config
+                .build(TorqueQp::exact(model()))
+                .err()
+                .expect("unsupported");
+            let err = err.to_string();
+            assert!(err.contains("--cones exact"), "{err}");
+            assert!(err.contains("active-set"), "{err}");
+        }
+    }
+
+    #[test]
+    fn exact_cones_default_to_the_native_solver() {
         let config = SolverConfig {
-            backend: Some(Backend::ActiveSet),
             cones: Cones::Exact,
             ..Default::default()
         };
+        let exact = TorqueQp::exact(model());
         if Backend::ActiveSet.is_compiled() {
-            let exact = TorqueQp::exact(model());
-            let err = config.build(exact).err().expect("unsupported").to_string();
-            assert!(err.contains("--cones exact"), "{err}");
-            if Backend::Clarabel.is_compiled() {
-                assert!(err.contains("clarabel"), "{err}");
-            }
+            assert_eq!(config.backend_for(&exact).unwrap(), Backend::ActiveSet);
         }
     }
 

@@ -7,7 +7,9 @@ pub use grasp_io::{
 };
 
 #[cfg(feature = "active-set")]
-pub use grasp_active_set::{ActiveSetSettings, ActiveSetSolver, ForceSpaceSolver, Phase1};
+pub use grasp_active_set::{
+    ActiveSetSettings, ActiveSetSolver, ExactSolver, ForceSpaceSolver, Phase1,
+};
 #[cfg(feature = "clarabel")]
 pub use grasp_clarabel::{ClarabelSettings, ClarabelSolver};
 #[cfg(feature = "osqp")]

@@ -60,11 +60,15 @@ pub struct SweepRow {
 /// A whole sweep.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sweep {
-    /// σ* from Clarabel on the exact cones (None when Clarabel is not compiled in or the
-    /// exact problem is not optimal).
+    /// σ* on the exact cones (None when no exact backend is compiled in or the exact
+    /// problem is not optimal).
     pub exact_objective: Option<f64>,
     /// Median time of the exact solve, µs.
     pub exact_time_us: Option<f64>,
+    /// The backend that gave σ*: the first compiled one with exact cones (native first).
+    pub exact_backend: Option<Backend>,
+    /// Clarabel's σ*, when σ* came from another backend and Clarabel is compiled in.
+    pub exact_cross_check: Option<f64>,
     /// One row per (N, K).
     pub rows: Vec<SweepRow>,
     /// Timed solves per row.
@@ -121,9 +125,11 @@ pub fn sweep(
     p.validate()?;
     // One model serves every linearisation: only the cone blocks change.
     let model = Arc::new(GraspModel::new(&p, &SolverConfig::default().model)?);
-    let (exact_objective, exact_time_us) = if Backend::Clarabel.is_compiled() {
+    // σ* from the first compiled exact backend (the native one when compiled in), and
+    // Clarabel's as the cross-check when it is another backend.
+    let exact = |backend: Backend| -> Result<(Option<f64>, f64), Error> {
         let c = SolverConfig {
-            backend: Some(Backend::Clarabel),
+            backend: Some(backend),
             cones: Cones::Exact,
             ..Default::default()
         };
@@ -133,9 +139,21 @@ pub fn sweep(
             &p.wrench,
             config.repeats.min(5),
         )?;
-        (s.is_optimal().then_some(s.objective), Some(t))
-    } else {
-        (None, None)
+        Ok((s.is_optimal().then_some(s.objective), t))
+    };
+    let exact_backend = Backend::compiled().find(|b| b.supports(Cones::Exact));
+    let (exact_objective, exact_time_us) = match exact_backend {
+        Some(b) => {
+            let (s, t) = exact(b)?;
+            (s, Some(t))
+        }
+        None => (None, None),
+    };
+    let exact_cross_check = match exact_backend {
+        Some(b) if b != Backend::Clarabel && Backend::Clarabel.is_compiled() => {
+            exact(Backend::Clarabel)?.0
+        }
+        _ => None,
     };
     let lin = SolverConfig {
         backend: Some(config.backend),
@@ -181,6 +199,8 @@ pub fn sweep(
     Ok(Sweep {
         exact_objective,
         exact_time_us,
+        exact_backend,
+        exact_cross_check,
         rows,
         repeats: config.repeats,
         gaps_clamped,

@@ -2,7 +2,7 @@
 //! exact SFCl cones with minimum normal forces, Clarabel's first solve at unusual
 //! scales, extreme torque weights, typed blocks that re-linearise one contact, and the
 //! degenerate grasps (an unloaded contact, two identical contacts, a nearly singular
-//! finger).
+//! finger), on which the native exact solver must agree with Clarabel's.
 #![cfg(all(feature = "active-set", feature = "clarabel"))]
 
 use grasp_testkit::{rescale, synthetic_grasp, ModelMix, SynthSpec};
@@ -348,6 +348,23 @@ fn agree(p: &GraspProblem) -> Solution {
         );
         assert!(e.is_optimal(), "{:?}", e.reason);
         assert!(e.objective <= a.objective * (1.0 + 1e-6) + 1e-12);
+    }
+    // The native exact solver agrees with Clarabel's, degenerate or not.
+    let n = run(p, Backend::ActiveSet, true);
+    assert_eq!(
+        n.status.has_answer(),
+        e.status.has_answer(),
+        "{:?} / {:?}",
+        n.reason,
+        e.reason
+    );
+    if n.is_optimal() {
+        assert!(
+            close(n.objective, e.objective),
+            "{} vs {}",
+            n.objective,
+            e.objective
+        );
     }
     a
 }

@@ -1,7 +1,7 @@
 //! A solve with an unchanged grasp and a new wrench or warm start allocates nothing:
 //! counted with a wrapping global allocator.
 
-use grasp_torque::{load_problem, GraspSolver, SolverConfig, WarmStart};
+use grasp_torque::{load_problem, Cones, GraspSolver, SolverConfig, WarmStart};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -39,6 +39,16 @@ static A: Counting = Counting;
 
 #[test]
 fn native_solves_reuse_the_workspace() {
+    for cones in [Cones::Linear, Cones::Exact] {
+        solves_reuse_the_workspace(cones);
+    }
+}
+
+fn solves_reuse_the_workspace(cones: Cones) {
+    let config = SolverConfig {
+        cones,
+        ..Default::default()
+    };
     for name in [
         "paper-example",
         "hand5-pcwf",
@@ -51,7 +61,7 @@ fn native_solves_reuse_the_workspace() {
             concat!(env!("CARGO_MANIFEST_DIR"), "/../..")
         ))
         .unwrap();
-        let mut s = GraspSolver::new(&p, &SolverConfig::default()).unwrap();
+        let mut s = GraspSolver::new(&p, &config).unwrap();
         let mut w = p.wrench;
         // Warm up: buffers grow to size once.
         s.solve(&w, &WarmStart::default()).unwrap();
@@ -62,7 +72,7 @@ fn native_solves_reuse_the_workspace() {
             assert!(s.resolve(&w).unwrap().is_optimal());
             assert!(s.solve(&w, &WarmStart::default()).unwrap().is_optimal());
         }
-        assert_eq!(allocations() - before, 0, "{name} allocated");
+        assert_eq!(allocations() - before, 0, "{name} ({cones}) allocated");
     }
 }
 

@@ -1,0 +1,404 @@
+//! The torque problem with exact cones as a scaled second-order cone program, the form
+//! every conic backend reads (Clarabel's, and the native interior-point fallback), and
+//! the certificate that proves one of its answers optimal.
+//!
+//! The variables are τ and the free internal forces ξ (when the model leaves them free).
+//! `f = Z1 w + Z2 τ + N ξ` is substituted,
+//! so every row is affine in the variables: `A x + s = b(w)`, `s ∈ K`, minimising
+//! `‖x_τ‖²` (`P = 2I` on the torques, 0 elsewhere).
+//!
+//! Rows, all read from the [`TorqueQp`] view and its typed cone blocks:
+//! - the consistency equalities `C τ = e(w)` (zero cone);
+//! - the linear rows `H τ + Hp ξ ≥ c(w)`: inscribed faces, every contact's minimum
+//!   normal force `fz ≥ f_min`, and the torque limits (nonnegative cone);
+//! - per exact contact: PCwF `(mu·fz, fx, fy)` ∈ SOC(3); SFCe
+//!   `(fz, fx/mu, fy/mu, mz/mu_torsion)` ∈ SOC(4) (eq. 4); SFCl
+//!   `(mu·(fz − mz/mu_torsion), fx, fy)` and `(mu·(fz + mz/mu_torsion), fx, fy)` ∈ SOC(3),
+//!   which together are eq. 3's `‖f_t‖/mu + |mz|/mu_torsion ≤ fz` with no auxiliary
+//!   variable (auxiliaries would be free, and curvature-free, wherever a contact is
+//!   inside its cone).
+//!
+//! **Scaling.** An interior-point method stops on absolute and relative tolerances, so
+//! the data are scaled: every row is in force units (`mz` counted as `mz/mu_torsion`),
+//! the torques are scaled to `k √w_j τ_j` (the objective becomes `‖x‖²`, with k putting
+//! x in force units), the free internal forces by their force response, and a solve
+//! divides the right-hand side by its own magnitude α (the problem is homogeneous:
+//! `(w, f_min, τmax) → α(…)` gives `τ → α τ`). [`ConicForm::torque`] unscales, so the
+//! answer is the same in any units and at any load.
+
+use crate::contact::ContactModel;
+use crate::matrix::{dot, norm2, Matrix};
+use crate::qp::{ConeRepr, RowId, TorqueQp};
+
+/// One block of rows of a [`ConicForm`], in row order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ConeKind {
+    /// `s = 0`: equalities.
+    Zero(usize),
+    /// `s ≥ 0`.
+    Nonnegative(usize),
+    /// `s0 ≥ ‖s1..‖`, of the given dimension.
+    SecondOrder(usize),
+}
+
+impl ConeKind {
+    /// Number of rows.
+    pub fn dim(&self) -> usize {
+        match *self {
+            ConeKind::Zero(d) | ConeKind::Nonnegative(d) | ConeKind::SecondOrder(d) => d,
+        }
+    }
+}
+
+/// The scaled conic problem of one [`TorqueQp`]: minimise `‖x_τ‖²` subject to
+/// `A x + s = b0 + bw·w`, `s ∈ K`.
+#[derive(Clone, Debug)]
+pub struct ConicForm {
+    /// Number of variables: joints, then free internal forces.
+    pub nx: usize,
+    /// Joints m (the first m variables carry the objective).
+    pub joints: usize,
+    /// Free internal forces d.
+    pub free: usize,
+    /// `A`, rows × nx.
+    pub a: Matrix,
+    /// Constant part of `b`.
+    pub b0: Vec<f64>,
+    /// Wrench part of `b`, rows × 6.
+    pub bw: Matrix,
+    /// The cones, in row order: the zero cone first, then the nonnegative cone, then
+    /// one second-order cone per exact contact with friction.
+    pub cones: Vec<ConeKind>,
+    /// Variable scale: `x = col_scale ⊙ (τ, ξ) / α`.
+    pub col_scale: Vec<f64>,
+    /// Objective normalisation κ: `Σ w_j τ_j² = α² κ ‖x_τ‖²`.
+    pub kappa: f64,
+    /// The linear rows of the view start at this row, each scaled by `row_scale`.
+    pub linear_at: usize,
+    /// Scale of each linear row of the view.
+    pub row_scale: Vec<f64>,
+}
+
+/// One affine row `a·x + s = b0 + bw·w`, before assembly.
+struct Row {
+    a: Vec<f64>,
+    b0: f64,
+    bw: [f64; 6],
+}
+
+impl ConicForm {
+    /// Assembles the conic problem of `qp` (exact blocks become second-order cones).
+    pub fn new(qp: &TorqueQp) -> Self {
+        let model = &qp.model;
+        let (m, d) = (model.joints(), model.free_dim());
+        let nx = m + d;
+        // Force-unit metric: mz counts as mz/mu_torsion.
+        let mut fscale = vec![1.0; model.force_dim()];
+        for c in &qp.contacts {
+            if let ContactModel::SfcLinear { mu_torsion, .. }
+            | ContactModel::SfcElliptic { mu_torsion, .. } = c.model
+            {
+                fscale[c.offset + 3] = 1.0 / mu_torsion;
+            }
+        }
+        // Column scales: the force response of a unit of each variable. A variable
+        // with no response at rounding level (a joint that moves no contact) takes the
+        // largest scale, so that its rounding-level column does not blow up.
+        let mut col_scale: Vec<f64> = (0..nx)
+            .map(|j| {
+                let v: Vec<f64> = (0..model.force_dim())
+                    .map(|i| {
+                        fscale[i]
+                            * if j < m {
+                                model.z2[(i, j)]
+                            } else {
+                                model.passive_basis[(i, j - m)]
+                            }
+                    })
+                    .collect();
+                norm2(&v)
+            })
+            .collect();
+        let largest = col_scale[m..m + d].iter().copied().fold(0.0, f64::max);
+        for s in &mut col_scale[m..m + d] {
+            if s.is_nan() || *s <= 1e3 * f64::EPSILON * largest {
+                *s = if largest > 0.0 { largest } else { 1.0 };
+            }
+        }
+        // Torques: x_j = k √w_j τ_j, so that the objective is ‖x‖² (a least-distance
+        // problem) and k = max_j (response_j / √w_j) puts x in force units.
+        let k = (0..m)
+            .map(|j| col_scale[j] / model.weights[j].sqrt())
+            .fold(0.0, f64::max);
+        let k = if k > 0.0 && k.is_finite() { k } else { 1.0 };
+        for j in 0..m {
+            col_scale[j] = k * model.weights[j].sqrt();
+        }
+        // A row "v·f + k ≥ 0" (v on force components, already in force units).
+        let force_row = |v: &[(usize, f64)], k: f64| -> Row {
+            let mut a = vec![0.0; nx];
+            let mut bw = [0.0; 6];
+            for &(i, c) in v {
+                for j in 0..m {
+                    a[j] -= c * model.z2[(i, j)] / col_scale[j];
+                }
+                for j in 0..d {
+                    a[m + j] -= c * model.passive_basis[(i, j)] / col_scale[m + j];
+                }
+                for (bj, z) in bw.iter_mut().zip(model.z1.row(i)) {
+                    *bj += c * z;
+                }
+            }
+            Row { a, b0: k, bw }
+        };
+        let mut zero = Vec::new();
+        for i in 0..model.equality_rows() {
+            // C τ = −eq_w w, each row normalised in the scaled variables.
+            let mut a: Vec<f64> = (0..nx)
+                .map(|j| {
+                    if j < m {
+                        model.eq[(i, j)] / col_scale[j]
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            let nrm = norm2(&a).max(f64::MIN_POSITIVE);
+            a.iter_mut().for_each(|v| *v /= nrm);
+            let mut bw = [0.0; 6];
+            for (j, v) in bw.iter_mut().enumerate() {
+                *v = -model.eq_w[(i, j)] / nrm;
+            }
+            zero.push(Row { a, b0: 0.0, bw });
+        }
+        // The linear rows of the view: −(H τ + Hp ξ) + s = −c0 + hw·w, in force units.
+        let linear_at = zero.len();
+        let mut nonneg = Vec::new();
+        let mut row_scale = Vec::with_capacity(qp.inequality_rows());
+        for i in 0..qp.inequality_rows() {
+            let rho = match qp.rows[i] {
+                RowId::TorqueLimit { joint, .. } => col_scale[joint],
+                _ => 1.0,
+            };
+            let mut a = vec![0.0; nx];
+            for j in 0..m {
+                a[j] = -rho * qp.h[(i, j)] / col_scale[j];
+            }
+            for j in 0..d {
+                a[m + j] = -rho * qp.hp[(i, j)] / col_scale[m + j];
+            }
+            let mut bw = [0.0; 6];
+            for (j, v) in bw.iter_mut().enumerate() {
+                *v = rho * qp.hw[(i, j)];
+            }
+            nonneg.push(Row {
+                a,
+                b0: -rho * qp.c0[i],
+                bw,
+            });
+            row_scale.push(rho);
+        }
+        let mut socs: Vec<Vec<Row>> = Vec::new();
+        for (c, repr) in qp.contacts.iter().zip(&qp.constraints.cones) {
+            if !matches!(repr, ConeRepr::Exact) {
+                continue;
+            }
+            let o = c.offset;
+            let (x, y, z, t) = (o, o + 1, o + 2, o + 3);
+            match c.model {
+                // fz ≥ f_min ≥ 0 is already a linear row.
+                ContactModel::Fpc => {}
+                ContactModel::Pcwf { mu } => socs.push(vec![
+                    force_row(&[(z, mu)], 0.0),
+                    force_row(&[(x, 1.0)], 0.0),
+                    force_row(&[(y, 1.0)], 0.0),
+                ]),
+                ContactModel::SfcElliptic { mu, mu_torsion } => socs.push(vec![
+                    force_row(&[(z, 1.0)], 0.0),
+                    force_row(&[(x, 1.0 / mu)], 0.0),
+                    force_row(&[(y, 1.0 / mu)], 0.0),
+                    force_row(&[(t, 1.0 / mu_torsion)], 0.0),
+                ]),
+                // ‖f_t‖/mu + |mz|/mu_torsion ≤ fz is ‖f_t‖ ≤ mu (fz ∓ mz/mu_torsion), both.
+                ContactModel::SfcLinear { mu, mu_torsion } => {
+                    for sign in [-1.0, 1.0] {
+                        socs.push(vec![
+                            force_row(&[(z, mu), (t, sign * mu / mu_torsion)], 0.0),
+                            force_row(&[(x, 1.0)], 0.0),
+                            force_row(&[(y, 1.0)], 0.0),
+                        ]);
+                    }
+                }
+            }
+        }
+        let mut cones = Vec::new();
+        let mut rows = Vec::new();
+        if !zero.is_empty() {
+            cones.push(ConeKind::Zero(zero.len()));
+            rows.extend(zero);
+        }
+        if !nonneg.is_empty() {
+            cones.push(ConeKind::Nonnegative(nonneg.len()));
+            rows.extend(nonneg);
+        }
+        for soc in socs {
+            cones.push(ConeKind::SecondOrder(soc.len()));
+            rows.extend(soc);
+        }
+        let n = rows.len();
+        Self {
+            nx,
+            joints: m,
+            free: d,
+            a: Matrix::from_fn(n, nx, |i, j| rows[i].a[j]),
+            b0: rows.iter().map(|r| r.b0).collect(),
+            bw: Matrix::from_fn(n, 6, |i, j| rows[i].bw[j]),
+            cones,
+            col_scale,
+            kappa: 1.0 / (k * k),
+            linear_at,
+            row_scale,
+        }
+    }
+
+    /// Number of rows.
+    pub fn rows(&self) -> usize {
+        self.a.nrows()
+    }
+
+    /// `b(w)` into `out`; returns its magnitude α = ‖b(w)‖∞, by which `out` is then
+    /// divided (unless it is 0: every row homogeneous, τ = 0 optimal).
+    pub fn b_into(&self, w: &[f64; 6], out: &mut [f64]) -> f64 {
+        for (i, b) in out.iter_mut().enumerate() {
+            *b = self.b0[i] + dot(self.bw.row(i), w);
+        }
+        let alpha = out.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        if alpha > 0.0 {
+            out.iter_mut().for_each(|v| *v /= alpha);
+        }
+        alpha
+    }
+
+    /// The torques and free internal forces of a scaled solution `x` at magnitude α.
+    pub fn unscale_into(&self, x: &[f64], alpha: f64, torque: &mut Vec<f64>, xi: &mut Vec<f64>) {
+        let (m, d) = (self.joints, self.free);
+        torque.clear();
+        torque.extend((0..m).map(|j| x[j] * alpha / self.col_scale[j]));
+        xi.clear();
+        xi.extend((0..d).map(|j| x[m + j] * alpha / self.col_scale[m + j]));
+    }
+
+    /// Checks from scratch that `(x, z)` is an optimal primal-dual pair of the scaled
+    /// problem with right-hand side `b`, to relative tolerance `tol`:
+    /// - primal feasibility: `s = b − A x` in K;
+    /// - dual feasibility: z in the dual cone K* (free on the zero cone);
+    /// - stationarity: `P x + Aᵀ z = 0`;
+    /// - complementarity and the duality gap: `xᵀPx + bᵀz = sᵀz ≈ 0`.
+    ///
+    /// Every measure is relative to the size of the terms it sums, so the check is the
+    /// same at any scale. `scratch` is grown once and reused (no allocation after).
+    pub fn certificate(
+        &self,
+        b: &[f64],
+        x: &[f64],
+        z: &[f64],
+        tol: f64,
+        scratch: &mut Vec<f64>,
+    ) -> Certificate {
+        let rows = self.rows();
+        let m = self.joints;
+        scratch.clear();
+        scratch.resize(2 * rows + 2 * self.nx, 0.0);
+        let (s, rest) = scratch.split_at_mut(rows);
+        let (size, rest) = rest.split_at_mut(rows);
+        let (grad, gsize) = rest.split_at_mut(self.nx);
+        // s = b − A x, with the size of each row's terms.
+        let mut primal = 0.0f64;
+        let mut start = 0;
+        for i in 0..rows {
+            let ax = dot(self.a.row(i), x);
+            s[i] = b[i] - ax;
+            size[i] = b[i].abs()
+                + self
+                    .a
+                    .row(i)
+                    .iter()
+                    .zip(x)
+                    .map(|(a, v)| (a * v).abs())
+                    .sum::<f64>();
+        }
+        let scale = size.iter().copied().fold(f64::MIN_POSITIVE, f64::max);
+        let zscale = z.iter().fold(f64::MIN_POSITIVE, |a, v| a.max(v.abs()));
+        let mut dual = 0.0f64;
+        for cone in &self.cones {
+            let r = start..start + cone.dim();
+            match *cone {
+                ConeKind::Zero(_) => {
+                    for i in r {
+                        primal = primal.max(s[i].abs() / scale);
+                    }
+                }
+                ConeKind::Nonnegative(_) => {
+                    for i in r {
+                        primal = primal.max(-s[i] / scale);
+                        dual = dual.max(-z[i] / zscale);
+                    }
+                }
+                ConeKind::SecondOrder(_) => {
+                    let (h, t) = (r.start, r.start + 1..r.end);
+                    primal = primal.max((norm2(&s[t.clone()]) - s[h]) / scale);
+                    dual = dual.max((norm2(&z[t]) - z[h]) / zscale);
+                }
+            }
+            start += cone.dim();
+        }
+        // P x + Aᵀ z, against Σ |terms| per column.
+        let mut stationarity = 0.0f64;
+        let mut colsize = 0.0f64;
+        for j in 0..m {
+            grad[j] = 2.0 * x[j];
+            gsize[j] = (2.0 * x[j]).abs();
+        }
+        for i in 0..rows {
+            for (j, a) in self.a.row(i).iter().enumerate() {
+                grad[j] += a * z[i];
+                gsize[j] += (a * z[i]).abs();
+            }
+        }
+        for j in 0..self.nx {
+            colsize = colsize.max(gsize[j]);
+        }
+        for g in grad.iter() {
+            stationarity = stationarity.max(g.abs() / colsize.max(f64::MIN_POSITIVE));
+        }
+        // Gap xᵀPx + bᵀz against the sizes of its terms.
+        let xpx: f64 = 2.0 * x[..m].iter().map(|v| v * v).sum::<f64>();
+        let bz: f64 = dot(b, z);
+        let gsize = xpx + b.iter().zip(z).map(|(b, z)| (b * z).abs()).sum::<f64>();
+        // The scaled problem's right-hand side has size 1, so its objective's natural
+        // size is 1: the floor for a grasp whose optimum is τ = 0.
+        let gap = (xpx + bz).abs() / gsize.max(1.0);
+        Certificate {
+            primal,
+            dual,
+            stationarity,
+            gap,
+            passed: primal <= tol && dual <= tol && stationarity <= tol && gap <= tol,
+        }
+    }
+}
+
+/// The outcome of [`ConicForm::certificate`]: each measure relative to its terms.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Certificate {
+    /// Largest cone or equality violation of `s = b − A x`.
+    pub primal: f64,
+    /// Largest violation of `z ∈ K*`.
+    pub dual: f64,
+    /// `‖P x + Aᵀ z‖∞`.
+    pub stationarity: f64,
+    /// `|xᵀPx + bᵀz|`, the duality gap.
+    pub gap: f64,
+    /// Whether every measure is within the tolerance.
+    pub passed: bool,
+}
