@@ -2,22 +2,32 @@
 //! themselves, not their linearisations, for every contact model.
 //!
 //! A solve:
-//! 1. solves the problem with circumscribed polyhedra (`N = 8`, which contain the
-//!    cones) by the active-set method: infeasible there is a certificate that the exact
-//!    problem is infeasible, found in a few microseconds;
-//! 2. solves the exact problem by the dense interior-point method of [`crate::ipm`] on
-//!    the core's scaled [`ConicForm`];
-//! 3. checks the answer from scratch ([`ConicForm::certificate`]: primal and dual cone
-//!    feasibility, stationarity, complementarity and the duality gap). Only an answer
-//!    that passes is `optimal`. One that does not, or a run that does not converge, is
-//!    tried once more against finer circumscribed polyhedra (`N = 256`, within 8e-5 of
-//!    the cones), which certify the grasps infeasible that the coarse ones could not.
+//! 1. solves the problem with the inscribed polyhedra (`N = 8`) by the active-set
+//!    method. Their key constraint set says, per contact, whether the force is inside
+//!    its cone or on its boundary: that guess starts the active-set Newton method of
+//!    [`crate::newton`] from the inscribed optimum, which converges in a few steps;
+//! 2. if the inscribed problem is infeasible, solves it with circumscribed polyhedra
+//!    (which contain the cones): infeasible there is a certificate that the exact
+//!    problem is infeasible;
+//! 3. checks the Newton answer from scratch ([`ConicForm::certificate`]: primal and
+//!    dual cone feasibility, stationarity, complementarity and the duality gap). Only an
+//!    answer that passes is `optimal` (`method: "newton"`);
+//! 4. otherwise (a contact at the apex, a guess Newton cannot correct, a grasp the
+//!    inscribed polyhedra cannot hold but the circumscribed can) falls back to the dense
+//!    interior-point method of [`crate::ipm`] on the same form, certificate-checked the
+//!    same way (`method: "interior_point"`). A run that fails is tried once more against
+//!    finer circumscribed polyhedra (`N = 256`, within 8e-5 of the cones).
+//!
+//! A warm solve (`GraspSolver::resolve`) starts Newton from the previous answer and its
+//! pieces, without the inscribed solve.
 
 use crate::ipm::{Ipm, IpmEnd, IpmSettings};
+use crate::newton::{Newton, Piece};
 use crate::{ActiveSetSettings, ActiveSetSolver, BuildError};
 use grasp_core::{
-    circumscribed_cone, Capabilities, Certificate, ConeRepr, ConicForm, Constraints, Linearization,
-    Reason, Solution, Status, TorqueQp, TorqueSolver, WarmStart,
+    circumscribed_cone, inscribed_cone, Capabilities, Certificate, ConeRepr, ConicForm,
+    Constraints, ContactModel, Linearization, Reason, RowId, Solution, Status, TorqueQp,
+    TorqueSolver, WarmStart,
 };
 
 /// Relative tolerance of the optimality certificate (each measure against the size of
@@ -36,6 +46,19 @@ pub struct ExactSolver {
     qp: TorqueQp,
     conic: ConicForm,
     ipm: Ipm,
+    /// The view with every exact cone inscribed, and its rows' meaning here: the conic
+    /// row of a row both views share, and the (contact, SFCl group) of an inscribed face.
+    inner: ActiveSetSolver,
+    inner_row: Vec<Option<usize>>,
+    inner_face: Vec<Option<(usize, usize)>>,
+    /// Faces per exact contact, active faces per (contact, group) in the last solve.
+    faces: Vec<usize>,
+    active_faces: Vec<[usize; 2]>,
+    /// Each second-order cone's (contact, group).
+    soc_group: Vec<(usize, usize)>,
+    newton: Newton,
+    /// Whether `newton` holds the last answer (for a warm solve), at magnitude α.
+    hot: Option<f64>,
     /// The view with every exact cone circumscribed.
     outer: ActiveSetSolver,
     settings: ActiveSetSettings,
@@ -79,12 +102,61 @@ impl ExactSolver {
             sides: PROOF_SIDES,
             ..qp.constraints.linearization.unwrap_or_default()
         };
-        let outer = ActiveSetSolver::new(polyhedral(&qp, &lin, circumscribed_cone), settings)?;
+        let inner_qp = polyhedral(&qp, &lin, inscribed_cone);
         let conic = ConicForm::new(&qp);
+        // Rows both views share (minimum normal forces, torque limits, inscribed
+        // contacts) are the conic form's nonnegative rows in the exact view's order.
+        let inner_row = inner_qp
+            .rows
+            .iter()
+            .map(|id| {
+                qp.rows
+                    .iter()
+                    .position(|r| r == id)
+                    .map(|i| conic.linear_at + i)
+            })
+            .collect();
+        let nc = qp.contacts.len();
+        let mut faces = vec![0; nc];
+        let inner_face = inner_qp
+            .rows
+            .iter()
+            .map(|id| match *id {
+                RowId::Face { contact, face }
+                    if matches!(qp.constraints.cones[contact], ConeRepr::Exact) =>
+                {
+                    faces[contact] += 1;
+                    // SFCl: the first N faces meet the +mz pole (they bind when mz > 0,
+                    // the form's first cone of the contact), the next N the −mz pole.
+                    let group = match qp.contacts[contact].model {
+                        ContactModel::SfcLinear { .. } => usize::from(face >= lin.sides),
+                        _ => 0,
+                    };
+                    Some((contact, group))
+                }
+                _ => None,
+            })
+            .collect();
+        let mut soc_group: Vec<(usize, usize)> = Vec::with_capacity(conic.soc_contacts.len());
+        for &c in &conic.soc_contacts {
+            let group = soc_group.iter().filter(|(d, _)| *d == c).count();
+            soc_group.push((c, group));
+        }
+        let inner = ActiveSetSolver::new(inner_qp, settings)?;
+        let outer = ActiveSetSolver::new(polyhedral(&qp, &lin, circumscribed_cone), settings)?;
         let ipm = Ipm::new(&conic, IpmSettings::default());
+        let newton = Newton::new(&conic);
         let rows = conic.rows();
         Ok(Self {
             ipm,
+            inner,
+            inner_row,
+            inner_face,
+            faces,
+            active_faces: vec![[0; 2]; nc],
+            soc_group,
+            newton,
+            hot: None,
             outer,
             settings,
             lin: Solution::default(),
@@ -97,7 +169,7 @@ impl ExactSolver {
         })
     }
 
-    /// The certificate of the last interior-point answer.
+    /// The certificate of the last answer.
     pub fn certificate(&self) -> &Certificate {
         &self.certificate
     }
@@ -132,6 +204,68 @@ impl ExactSolver {
         })
     }
 
+    /// The Newton guess from the inscribed optimum in `self.lin`; false for a contact
+    /// at the apex (all its faces active), where the cone is not smooth.
+    fn guess(&mut self, alpha: f64) -> bool {
+        let nw = &mut self.newton;
+        nw.active.iter_mut().for_each(|a| *a = false);
+        self.active_faces.iter_mut().for_each(|c| *c = [0; 2]);
+        for &i in self.lin.active_set.as_deref().unwrap_or(&[]) {
+            if let Some(r) = self.inner_row[i] {
+                nw.active[r] = true;
+            }
+            if let Some((c, g)) = self.inner_face[i] {
+                self.active_faces[c][g] += 1;
+            }
+        }
+        for (k, &(c, g)) in self.soc_group.iter().enumerate() {
+            let [a, b] = self.active_faces[c];
+            if a + b == self.faces[c] {
+                return false;
+            }
+            let on = if g == 0 { a } else { b };
+            nw.piece[k] = if on > 0 {
+                Piece::Boundary
+            } else {
+                Piece::Inside
+            };
+        }
+        for (j, x) in nw.x.iter_mut().enumerate() {
+            *x = self.lin.torque[j] * self.conic.col_scale[j] / alpha;
+        }
+        nw.reset_multipliers();
+        true
+    }
+
+    /// Newton from its current state; on a certified answer fills `out`.
+    fn try_newton(&mut self, alpha: f64, out: &mut Solution) -> bool {
+        let ok = self.newton.solve(&self.conic, &self.b);
+        out.iterations += self.newton.iterations;
+        if ok {
+            self.certificate = self.conic.certificate(
+                &self.b,
+                &self.newton.x,
+                &self.newton.z,
+                CERTIFICATE_TOLERANCE,
+                &mut self.scratch,
+            );
+            if self.certificate.passed {
+                out.status = Status::Optimal;
+                out.method = Some("newton");
+                self.conic.unscale_into(
+                    &self.newton.x,
+                    alpha,
+                    &mut out.torque,
+                    &mut out.internal_forces,
+                );
+                self.hot = Some(alpha);
+                return true;
+            }
+        }
+        self.hot = None;
+        false
+    }
+
     fn infeasible(out: &mut Solution, reason: Reason) {
         out.status = Status::Infeasible;
         out.reason = Some(reason);
@@ -156,31 +290,47 @@ impl TorqueSolver for ExactSolver {
         &self.qp
     }
 
-    fn solve_raw(&mut self, w: &[f64; 6], _warm: &WarmStart<'_>, out: &mut Solution) {
+    fn solve_raw(&mut self, w: &[f64; 6], warm: &WarmStart<'_>, out: &mut Solution) {
         out.active_set = None;
         out.iterations = 0;
         out.torque.clear();
         out.internal_forces.clear();
-        // 1. Infeasibility: the circumscribed polyhedra.
-        if let Some(reason) = self.outer_infeasible(w, PROOF_SIDES) {
-            out.iterations = self.lin.iterations;
-            return Self::infeasible(out, reason);
-        }
-        out.iterations = self.lin.iterations;
-        // 2. The exact problem.
         let alpha = self.conic.b_into(w, &mut self.b);
         if alpha == 0.0 {
             // Every row is homogeneous: τ = 0 is feasible and optimal.
             out.status = Status::Optimal;
             out.torque.resize(self.conic.joints, 0.0);
-            out.method = Some("interior_point");
+            self.hot = None;
             return;
         }
+        // Hot: Newton from the previous answer and its pieces (the scaled problem's
+        // solution scales with 1/α).
+        if let (false, Some(prev)) = (warm.is_cold(), self.hot) {
+            self.newton.rescale(prev / alpha);
+            if self.try_newton(alpha, out) {
+                return;
+            }
+        }
+        // 1. The inscribed polyhedra: a guess for Newton, or a reason to look further.
+        self.inner
+            .solve_raw(w, &WarmStart::default(), &mut self.lin);
+        out.iterations += self.lin.iterations;
+        let feasible = self.lin.status == Status::Optimal;
+        if feasible && self.guess(alpha) && self.try_newton(alpha, out) {
+            return;
+        }
+        if self.lin.status == Status::Infeasible {
+            // 2. The circumscribed polyhedra.
+            if let Some(reason) = self.outer_infeasible(w, PROOF_SIDES) {
+                return Self::infeasible(out, reason);
+            }
+        }
+        // 4. The interior-point fallback.
+        self.hot = None;
         let end = self.ipm.solve(&self.conic, &self.b);
         out.iterations += self.ipm.iterations;
         out.method = Some("interior_point");
         if end == IpmEnd::Converged {
-            // 3. The certificate, from scratch.
             self.ipm.dual_into(&self.conic, &mut self.dual);
             self.certificate = self.conic.certificate(
                 &self.b,

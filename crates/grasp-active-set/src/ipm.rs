@@ -13,6 +13,7 @@
 //! does not end with a certificate; infeasibility is decided before it runs (the
 //! inscribed and circumscribed polyhedra), so it has no homogeneous embedding.
 
+use crate::dense::{backward, cholesky, forward};
 use grasp_core::matrix::{dot, norm2, norm_inf};
 use grasp_core::{ConeKind, ConicForm, Matrix};
 
@@ -947,52 +948,6 @@ fn apply_winv(w: &[f64], eta: f64, v: &[f64], out: &mut [f64]) {
     let c = -v[0] + w1v1 / (1.0 + w[0]);
     for k in 1..out.len() {
         out[k] = (v[k] + c * w[k]) / eta;
-    }
-}
-
-/// In-place Cholesky `A = L Lᵀ` (lower triangle of row-major `a`); false if not
-/// positive definite.
-fn cholesky(a: &mut [f64], n: usize) -> bool {
-    for j in 0..n {
-        let mut d = a[j * n + j];
-        for k in 0..j {
-            d -= a[j * n + k] * a[j * n + k];
-        }
-        if d.is_nan() || d <= 0.0 || !d.is_finite() {
-            return false;
-        }
-        let d = d.sqrt();
-        a[j * n + j] = d;
-        for i in j + 1..n {
-            let mut v = a[i * n + j];
-            for k in 0..j {
-                v -= a[i * n + k] * a[j * n + k];
-            }
-            a[i * n + j] = v / d;
-        }
-    }
-    true
-}
-
-/// Solves `L x = b` in place.
-fn forward(l: &[f64], n: usize, b: &mut [f64]) {
-    for i in 0..n {
-        let mut v = b[i];
-        for k in 0..i {
-            v -= l[i * n + k] * b[k];
-        }
-        b[i] = v / l[i * n + i];
-    }
-}
-
-/// Solves `Lᵀ x = b` in place.
-fn backward(l: &[f64], n: usize, b: &mut [f64]) {
-    for i in (0..n).rev() {
-        let mut v = b[i];
-        for k in i + 1..n {
-            v -= l[k * n + i] * b[k];
-        }
-        b[i] = v / l[i * n + i];
     }
 }
 

@@ -30,9 +30,11 @@ use grasp_core::{
     TorqueSolver, WarmStart,
 };
 
+mod dense;
 mod exact;
 mod factor;
 mod ipm;
+mod newton;
 pub use exact::{ExactSolver, CERTIFICATE_TOLERANCE};
 use factor::Factor;
 

@@ -77,6 +77,9 @@ pub struct ConicForm {
     pub linear_at: usize,
     /// Scale of each linear row of the view.
     pub row_scale: Vec<f64>,
+    /// The contact of each second-order cone, in cone order. An SFCl contact has two:
+    /// first `fz − mz/mu_torsion` (binding when `mz > 0`), then `fz + mz/mu_torsion`.
+    pub soc_contacts: Vec<usize>,
 }
 
 /// One affine row `a·x + s = b0 + bw·w`, before assembly.
@@ -199,7 +202,8 @@ impl ConicForm {
             row_scale.push(rho);
         }
         let mut socs: Vec<Vec<Row>> = Vec::new();
-        for (c, repr) in qp.contacts.iter().zip(&qp.constraints.cones) {
+        let mut soc_contacts = Vec::new();
+        for (ci, (c, repr)) in qp.contacts.iter().zip(&qp.constraints.cones).enumerate() {
             if !matches!(repr, ConeRepr::Exact) {
                 continue;
             }
@@ -208,20 +212,27 @@ impl ConicForm {
             match c.model {
                 // fz ≥ f_min ≥ 0 is already a linear row.
                 ContactModel::Fpc => {}
-                ContactModel::Pcwf { mu } => socs.push(vec![
-                    force_row(&[(z, mu)], 0.0),
-                    force_row(&[(x, 1.0)], 0.0),
-                    force_row(&[(y, 1.0)], 0.0),
-                ]),
-                ContactModel::SfcElliptic { mu, mu_torsion } => socs.push(vec![
-                    force_row(&[(z, 1.0)], 0.0),
-                    force_row(&[(x, 1.0 / mu)], 0.0),
-                    force_row(&[(y, 1.0 / mu)], 0.0),
-                    force_row(&[(t, 1.0 / mu_torsion)], 0.0),
-                ]),
+                ContactModel::Pcwf { mu } => {
+                    soc_contacts.push(ci);
+                    socs.push(vec![
+                        force_row(&[(z, mu)], 0.0),
+                        force_row(&[(x, 1.0)], 0.0),
+                        force_row(&[(y, 1.0)], 0.0),
+                    ])
+                }
+                ContactModel::SfcElliptic { mu, mu_torsion } => {
+                    soc_contacts.push(ci);
+                    socs.push(vec![
+                        force_row(&[(z, 1.0)], 0.0),
+                        force_row(&[(x, 1.0 / mu)], 0.0),
+                        force_row(&[(y, 1.0 / mu)], 0.0),
+                        force_row(&[(t, 1.0 / mu_torsion)], 0.0),
+                    ])
+                }
                 // ‖f_t‖/mu + |mz|/mu_torsion ≤ fz is ‖f_t‖ ≤ mu (fz ∓ mz/mu_torsion), both.
                 ContactModel::SfcLinear { mu, mu_torsion } => {
                     for sign in [-1.0, 1.0] {
+                        soc_contacts.push(ci);
                         socs.push(vec![
                             force_row(&[(z, mu), (t, sign * mu / mu_torsion)], 0.0),
                             force_row(&[(x, 1.0)], 0.0),
@@ -258,6 +269,7 @@ impl ConicForm {
             kappa: 1.0 / (k * k),
             linear_at,
             row_scale,
+            soc_contacts,
         }
     }
 

@@ -28,19 +28,20 @@ fn rel(a: f64, b: f64) -> f64 {
 /// The references sit up to 2e-9 above the true optimum (their README): 3e-9.
 #[test]
 fn reference_exact_objectives_are_reproduced_natively() {
-    let mut worst = 0.0f64;
+    let (mut worst, mut newton) = (0.0f64, 0);
     for case in grasp_testkit::reference_cases() {
         let p = grasp_testkit::reference_problem(&case["problem"]);
         let name = case["name"].as_str().unwrap();
         let want = case["reference"]["exact"]["objective"].as_f64().unwrap();
         let s = run(&p, Backend::ActiveSet, Cones::Exact);
         assert_eq!(s.status, Status::Optimal, "{name}: {:?}", s.reason);
-        assert_eq!(s.method, Some("interior_point"), "{name}");
+        assert!(s.method.is_some(), "{name}");
+        newton += usize::from(s.method == Some("newton"));
         let r = rel(s.objective, want);
         assert!(r <= 3e-9, "{name}: {} vs {want} ({r:.1e})", s.objective);
         worst = worst.max(r);
     }
-    eprintln!("worst relative difference to the exact references: {worst:.2e}");
+    eprintln!("worst relative difference to the exact references: {worst:.2e}; {newton} of 41 by Newton, the rest by the interior-point fallback");
 }
 
 /// `solve FILE --cones exact` picks the native solver by default.
@@ -98,7 +99,7 @@ fn robustness_sweep_against_clarabel_and_the_linearisations() {
     // unreachable wrench (the core's check).
     let mut count = [0usize; 5];
     let mut worst = 0.0f64;
-    let mut linear_checks = 0;
+    let (mut linear_checks, mut fallback) = (0, 0);
     for (friction, seeds) in [(1.0, 0..300u64), (0.25, 1000..1300u64)] {
         for seed in seeds {
             let p = grasp(seed, friction);
@@ -115,6 +116,7 @@ fn robustness_sweep_against_clarabel_and_the_linearisations() {
             match native.status {
                 Status::Optimal => {
                     count[0] += 1;
+                    fallback += usize::from(native.method == Some("interior_point"));
                     if clarabel.status == Status::Optimal {
                         let r = rel(native.objective, clarabel.objective);
                         // σ ≈ 0 (a load the contacts take without torque): absolute.
@@ -154,7 +156,7 @@ fn robustness_sweep_against_clarabel_and_the_linearisations() {
         }
     }
     eprintln!(
-        "600 grasps: {} optimal, {} infeasible by the N = 8 circumscribed cones, {} by N = 256, {} with an unreachable wrench, {} other; worst σ difference to Clarabel {worst:.1e}; {linear_checks} σ* ≤ σ(N) checks",
+        "600 grasps: {} optimal ({fallback} by the interior-point fallback), {} infeasible by the N = 8 circumscribed cones, {} by N = 256, {} with an unreachable wrench, {} other; worst σ difference to Clarabel {worst:.1e}; {linear_checks} σ* ≤ σ(N) checks",
         count[0], count[1], count[2], count[4], count[3]
     );
     assert!(count[0] > 100 && count[1] > 10, "{count:?}");

@@ -1,0 +1,489 @@
+//! Active-set Newton on the exact cones, started from the linearised optimum.
+//!
+//! At the optimum each second-order cone of the [`ConicForm`] is inactive (its contact
+//! force strictly inside) or on its smooth boundary `g(x) = ‖s1‖ − s0 = 0`, with
+//! `s = b − A x`; each nonnegative row is inactive or active (`s_i = 0`). With that
+//! guess — read off the inscribed optimum's key constraint set — the optimum solves the
+//! equality-constrained problem `min ½ xᵀPx` s.t. `E x = b_E`, the active rows and the
+//! active boundaries. Newton's method on its KKT system converges quadratically:
+//!
+//! ```text
+//! (P + Σ ν_k ∇²g_k) dx + Cᵀ ν⁺ = −P x,   C dx = −c(x),
+//! ∇g_k = A_kᵀ (1, −u),   ∇²g_k = A_k1ᵀ (I − u uᵀ) A_k1 / ‖s1‖,   u = s1/‖s1‖
+//! ```
+//!
+//! `∇²g_k` is positive semidefinite (g is convex) and P = 2I on the torques, so the
+//! Hessian is positive definite: one Cholesky factor and the Schur complement of the
+//! few constraint rows. Then the guess is corrected like a primal active-set method: a
+//! violated inactive piece joins, a negative multiplier leaves. The conic dual is
+//! `z_i = ν_i` on rows and `z_k = ν_k (1, −u)` on a boundary (in K exactly when
+//! `ν_k ≥ 0`), so the caller's certificate checks the answer. A contact at the apex
+//! (where g is not differentiable), or a guess that does not converge, is left to the
+//! interior-point method.
+
+use crate::dense::{backward, cholesky, dot4, forward};
+use crate::ipm::SOC_MAX;
+use grasp_core::linalg::{decompose, RankThreshold};
+use grasp_core::matrix::norm_inf;
+use grasp_core::{ConeKind, ConicForm, Matrix};
+
+/// Newton iterations per guess, and corrections of the guess.
+const MAX_NEWTON: usize = 12;
+const MAX_CHANGES: usize = 8;
+
+/// Where a second-order cone is at the optimum.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Piece {
+    /// Its contact force is strictly inside.
+    Inside,
+    /// On its smooth boundary.
+    Boundary,
+}
+
+/// How Newton's method on one guess ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Step {
+    Converged,
+    /// A multiplier of the wrong sign: drop it before converging.
+    Negative,
+    Failed,
+}
+
+/// One row of the Newton constraint matrix: what its multiplier belongs to.
+#[derive(Clone, Copy, Debug)]
+enum Owner {
+    Row(usize),
+    Cone(usize),
+}
+
+/// The Newton solver of one conic form, with its workspace.
+#[derive(Clone, Debug)]
+pub(crate) struct Newton {
+    n: usize,
+    /// Zero-cone rows `0..eq`, nonnegative rows `orth.0..orth.1`.
+    eq: usize,
+    orth: (usize, usize),
+    /// Second-order cones: `(first row, dim)`.
+    socs: Vec<(usize, usize)>,
+    /// Per row of the form: whether a nonnegative row is active.
+    pub(crate) active: Vec<bool>,
+    /// Per second-order cone.
+    pub(crate) piece: Vec<Piece>,
+    /// Multipliers per row and per cone.
+    nu_row: Vec<f64>,
+    nu_cone: Vec<f64>,
+    /// The consistency equalities eliminated once per grasp: `x = x_p + N y` with
+    /// `x_p = E⁺ b_E` (orthogonal to N), so the objective is `‖y‖²` plus a constant.
+    null_basis: Matrix,
+    e_pinv: Matrix,
+    /// Rows of A times N (rows × k; the equality rows are unused).
+    a_red: Matrix,
+    /// `b − A x_p`, per solve.
+    b_red: Vec<f64>,
+    xp: Vec<f64>,
+    y: Vec<f64>,
+    /// The iterate in the form's variables.
+    pub(crate) x: Vec<f64>,
+    pub(crate) z: Vec<f64>,
+    pub(crate) iterations: usize,
+    s: Vec<f64>,
+    h: Vec<f64>,
+    c: Vec<f64>,
+    cval: Vec<f64>,
+    owner: Vec<Owner>,
+    ycols: Vec<f64>,
+    schur: Vec<f64>,
+    t: Vec<f64>,
+    nu: Vec<f64>,
+    dx: Vec<f64>,
+}
+
+impl Newton {
+    pub(crate) fn new(form: &ConicForm) -> Self {
+        let (n, rows) = (form.nx, form.rows());
+        let (mut eq, mut orth, mut socs) = (0, (0, 0), Vec::new());
+        let mut row = 0;
+        for cone in &form.cones {
+            match *cone {
+                ConeKind::Zero(d) => eq = d,
+                ConeKind::Nonnegative(d) => orth = (row, row + d),
+                ConeKind::SecondOrder(d) => socs.push((row, d)),
+            }
+            row += cone.dim();
+        }
+        let e = Matrix::from_fn(eq, n, |i, j| form.a[(i, j)]);
+        let (null_basis, e_pinv) = if eq == 0 {
+            (Matrix::identity(n), Matrix::zeros(n, 0))
+        } else {
+            // The core hands over independent, normalised equality rows.
+            match decompose(&e, RankThreshold::Relative(1e-13)) {
+                Ok(d) if d.rank() == eq => (d.null_basis.clone(), d.pseudo_inverse()),
+                _ => (Matrix::zeros(n, 0), Matrix::zeros(n, eq)),
+            }
+        };
+        let k = null_basis.ncols();
+        let a_red = Matrix::from_fn(rows, k, |i, j| {
+            if i < eq {
+                0.0
+            } else {
+                dot4(form.a.row(i), &column(&null_basis, j))
+            }
+        });
+        let n = k;
+        let ncmax = (orth.1 - orth.0) + socs.len();
+        Self {
+            null_basis,
+            e_pinv,
+            a_red,
+            b_red: vec![0.0; rows],
+            xp: vec![0.0; form.nx],
+            y: vec![0.0; k],
+            n,
+            eq,
+            orth,
+            active: vec![false; rows],
+            piece: vec![Piece::Inside; socs.len()],
+            nu_row: vec![0.0; rows],
+            nu_cone: vec![0.0; socs.len()],
+            socs,
+            x: vec![0.0; form.nx],
+            z: vec![0.0; rows],
+            iterations: 0,
+            s: vec![0.0; rows],
+            h: vec![0.0; n * n],
+            c: vec![0.0; ncmax * n],
+            cval: vec![0.0; ncmax],
+            owner: vec![Owner::Row(0); ncmax],
+            ycols: vec![0.0; ncmax * n],
+            schur: vec![0.0; ncmax * ncmax],
+            t: vec![0.0; n.max(form.nx)],
+            nu: vec![0.0; ncmax],
+            dx: vec![0.0; n],
+        }
+    }
+
+    /// Scales the iterate and multipliers by `f` (the scaled problem's answer moves
+    /// with 1/α when the right-hand side's magnitude α changes).
+    pub(crate) fn rescale(&mut self, f: f64) {
+        for v in self
+            .x
+            .iter_mut()
+            .chain(&mut self.nu_row)
+            .chain(&mut self.nu_cone)
+        {
+            *v *= f;
+        }
+    }
+
+    /// Clears multipliers before a new guess.
+    pub(crate) fn reset_multipliers(&mut self) {
+        self.nu_row.iter_mut().for_each(|v| *v = 0.0);
+        self.nu_cone.iter_mut().for_each(|v| *v = 0.0);
+    }
+
+    /// Solves from `self.x` and the guess in `active`/`piece`; on success `x` and `z`
+    /// hold a primal-dual pair for the caller's certificate.
+    pub(crate) fn solve(&mut self, form: &ConicForm, b: &[f64]) -> bool {
+        self.iterations = 0;
+        if self.null_basis.nrows() != form.nx || form.free > 0 {
+            // The equalities could not be eliminated (or free internal forces, which
+            // carry no curvature): the interior-point method's case.
+            return false;
+        }
+        // x_p = E⁺ b_E, b_red = b − A x_p, y = Nᵀ x.
+        let nx = form.nx;
+        for j in 0..nx {
+            self.xp[j] = dot4(self.e_pinv.row(j), &b[..self.eq]);
+        }
+        for i in self.eq..b.len() {
+            self.b_red[i] = b[i] - dot4(form.a.row(i), &self.xp);
+        }
+        for (j, y) in self.y.iter_mut().enumerate() {
+            *y = (0..nx).map(|i| self.null_basis[(i, j)] * self.x[i]).sum();
+        }
+        for _ in 0..MAX_CHANGES {
+            let end = self.newton();
+            if end == Step::Failed {
+                return false;
+            }
+            self.slacks();
+            // Scaled data: b has size 1, so absolute tolerances are relative ones.
+            let size = norm_inf(&self.x).max(1.0);
+            let feas = 1e-10 * size;
+            // The most violated inactive piece joins.
+            let mut worst: Option<(f64, Owner)> = None;
+            for i in self.orth.0..self.orth.1 {
+                if !self.active[i] && -self.s[i] > feas {
+                    let v = -self.s[i];
+                    if worst.is_none_or(|(w, _)| v > w) {
+                        worst = Some((v, Owner::Row(i)));
+                    }
+                }
+            }
+            for (k, &(start, dim)) in self.socs.iter().enumerate() {
+                if self.piece[k] == Piece::Inside {
+                    let v = soc_norm(&self.s[start + 1..start + dim]) - self.s[start];
+                    if v > feas && worst.is_none_or(|(w, _)| v > w) {
+                        worst = Some((v, Owner::Cone(k)));
+                    }
+                }
+            }
+            if let (Step::Converged, Some((_, o))) = (end, worst) {
+                match o {
+                    Owner::Row(i) => self.active[i] = true,
+                    Owner::Cone(k) => self.piece[k] = Piece::Boundary,
+                }
+                continue;
+            }
+            // The most negative multiplier leaves.
+            let numax = self
+                .nu_row
+                .iter()
+                .chain(&self.nu_cone)
+                .fold(f64::MIN_POSITIVE, |a, v| a.max(v.abs()));
+            let mut most: Option<(f64, Owner)> = None;
+            for i in self.orth.0..self.orth.1 {
+                if self.active[i] && self.nu_row[i] < -1e-12 * numax {
+                    let v = self.nu_row[i];
+                    if most.is_none_or(|(m, _)| v < m) {
+                        most = Some((v, Owner::Row(i)));
+                    }
+                }
+            }
+            for k in 0..self.socs.len() {
+                if self.piece[k] == Piece::Boundary && self.nu_cone[k] < -1e-12 * numax {
+                    let v = self.nu_cone[k];
+                    if most.is_none_or(|(m, _)| v < m) {
+                        most = Some((v, Owner::Cone(k)));
+                    }
+                }
+            }
+            if let Some((_, o)) = most {
+                match o {
+                    Owner::Row(i) => self.active[i] = false,
+                    Owner::Cone(k) => self.piece[k] = Piece::Inside,
+                }
+                continue;
+            }
+            self.finish(form);
+            return true;
+        }
+        false
+    }
+
+    /// `x = x_p + N y`, and the conic dual, the equalities' part from stationarity:
+    /// `z_E = −(E⁺)ᵀ (P x + A_inᵀ z_in)`.
+    fn finish(&mut self, form: &ConicForm) {
+        let nx = form.nx;
+        for i in 0..nx {
+            self.x[i] = self.xp[i] + dot4(self.null_basis.row(i), &self.y);
+        }
+        self.dual();
+        let g = &mut self.t[..nx];
+        for j in 0..nx {
+            g[j] = if j < form.joints {
+                2.0 * self.x[j]
+            } else {
+                0.0
+            };
+        }
+        for i in self.eq..form.rows() {
+            let zi = self.z[i];
+            if zi != 0.0 {
+                for (gj, a) in g.iter_mut().zip(form.a.row(i)) {
+                    *gj += zi * a;
+                }
+            }
+        }
+        for i in 0..self.eq {
+            self.z[i] = -(0..nx).map(|j| self.e_pinv[(j, i)] * g[j]).sum::<f64>();
+        }
+    }
+
+    /// `s = b − A x` on the inequality rows, in the reduced variables.
+    fn slacks(&mut self) {
+        for i in self.eq..self.s.len() {
+            self.s[i] = self.b_red[i] - dot4(self.a_red.row(i), &self.y);
+        }
+    }
+
+    /// The conic dual of the current multipliers.
+    fn dual(&mut self) {
+        self.z.iter_mut().for_each(|v| *v = 0.0);
+        for i in self.orth.0..self.orth.1 {
+            if self.active[i] {
+                self.z[i] = self.nu_row[i];
+            }
+        }
+        for (k, &(start, dim)) in self.socs.iter().enumerate() {
+            if self.piece[k] == Piece::Boundary {
+                let r = soc_norm(&self.s[start + 1..start + dim]);
+                let nu = self.nu_cone[k];
+                self.z[start] = nu;
+                for j in 1..dim {
+                    self.z[start + j] = -nu * self.s[start + j] / r;
+                }
+            }
+        }
+    }
+
+    /// Newton's method on the current guess.
+    fn newton(&mut self) -> Step {
+        let n = self.n;
+        for it in 0..MAX_NEWTON {
+            self.iterations += 1;
+            self.slacks();
+            // Constraint rows C and values c(x).
+            let mut nc = 0;
+            for i in self.orth.0..self.orth.1 {
+                if self.active[i] {
+                    self.c[nc * n..nc * n + n].copy_from_slice(self.a_red.row(i));
+                    self.cval[nc] = -self.s[i];
+                    self.owner[nc] = Owner::Row(i);
+                    nc += 1;
+                }
+            }
+            // H = P (2I: the objective is ‖y‖²), then the curvature.
+            self.h.iter_mut().for_each(|v| *v = 0.0);
+            for j in 0..n {
+                self.h[j * n + j] = 2.0;
+            }
+            for (k, &(start, dim)) in self.socs.iter().enumerate() {
+                if self.piece[k] != Piece::Boundary {
+                    continue;
+                }
+                let s1 = &self.s[start + 1..start + dim];
+                let r = soc_norm(s1);
+                if r.is_nan() || r <= 1e-12 * (self.s[start].abs() + r) {
+                    // At the apex g is not differentiable.
+                    return Step::Failed;
+                }
+                let row = &mut self.c[nc * n..nc * n + n];
+                row.copy_from_slice(self.a_red.row(start));
+                for j in 1..dim {
+                    let u = s1[j - 1] / r;
+                    for (c, a) in row.iter_mut().zip(self.a_red.row(start + j)) {
+                        *c -= u * a;
+                    }
+                }
+                self.cval[nc] = r - self.s[start];
+                self.owner[nc] = Owner::Cone(k);
+                nc += 1;
+                let nu = self.nu_cone[k];
+                if nu <= 0.0 {
+                    continue;
+                }
+                // ν A1ᵀ (I − uuᵀ) A1 / r = Σ_p a_p b_pᵀ with b_p = (ν/r) Σ_q (δ_pq − u_p u_q) a_q
+                // (upper triangle, one rank-one update per row of A1).
+                let d1 = dim - 1;
+                let mut u = [0.0; SOC_MAX];
+                for q in 0..d1 {
+                    u[q] = s1[q] / r;
+                }
+                for p in 0..d1 {
+                    let bp = &mut self.t[..n];
+                    bp.copy_from_slice(self.a_red.row(start + 1 + p));
+                    let c = nu / r;
+                    bp.iter_mut().for_each(|v| *v *= c);
+                    for q in 0..d1 {
+                        let m = -c * u[p] * u[q];
+                        for (v, a) in bp.iter_mut().zip(self.a_red.row(start + 1 + q)) {
+                            *v += m * a;
+                        }
+                    }
+                    let ap = self.a_red.row(start + 1 + p);
+                    for i in 0..n {
+                        let ai = ap[i];
+                        if ai == 0.0 {
+                            continue;
+                        }
+                        for (h, bj) in self.h[i * n + i..i * n + n].iter_mut().zip(&bp[i..]) {
+                            *h += ai * bj;
+                        }
+                    }
+                }
+            }
+            for i in 0..n {
+                for j in 0..i {
+                    self.h[i * n + j] = self.h[j * n + i];
+                }
+            }
+            if !cholesky(&mut self.h, n) {
+                return Step::Failed;
+            }
+            // Y = L⁻¹ Cᵀ, S = YᵀY, t = L⁻¹(−P x).
+            for r in 0..nc {
+                let col = &mut self.ycols[r * n..r * n + n];
+                col.copy_from_slice(&self.c[r * n..r * n + n]);
+                forward(&self.h, n, col);
+            }
+            for r in 0..nc {
+                for q in 0..=r {
+                    let v = dot4(&self.ycols[r * n..r * n + n], &self.ycols[q * n..q * n + n]);
+                    self.schur[r * nc + q] = v;
+                    self.schur[q * nc + r] = v;
+                }
+            }
+            if nc > 0 && !cholesky(&mut self.schur[..nc * nc], nc) {
+                // Dependent constraints: the guess is degenerate.
+                return Step::Failed;
+            }
+            for j in 0..n {
+                self.t[j] = -2.0 * self.y[j];
+            }
+            forward(&self.h, n, &mut self.t[..n]);
+            // S ν = Yᵀ t + c(x); dx = L⁻ᵀ (t − Y ν).
+            for r in 0..nc {
+                self.nu[r] = dot4(&self.ycols[r * n..r * n + n], &self.t[..n]) + self.cval[r];
+            }
+            if nc > 0 {
+                forward(&self.schur[..nc * nc], nc, &mut self.nu[..nc]);
+                backward(&self.schur[..nc * nc], nc, &mut self.nu[..nc]);
+            }
+            self.dx.copy_from_slice(&self.t[..n]);
+            for r in 0..nc {
+                let v = self.nu[r];
+                for (d, y) in self.dx.iter_mut().zip(&self.ycols[r * n..r * n + n]) {
+                    *d -= v * y;
+                }
+            }
+            backward(&self.h, n, &mut self.dx);
+            for r in 0..nc {
+                match self.owner[r] {
+                    Owner::Row(i) => self.nu_row[i] = self.nu[r],
+                    Owner::Cone(k) => self.nu_cone[k] = self.nu[r],
+                }
+            }
+            for (y, d) in self.y.iter_mut().zip(&self.dx) {
+                *y += d;
+            }
+            if !self.y.iter().all(|v| v.is_finite()) {
+                return Step::Failed;
+            }
+            // Converged: with every multiplier of the right sign the Hessian is exact
+            // and the error after this step is of the order of its square.
+            if norm_inf(&self.dx) <= 1e-10 * norm_inf(&self.y).max(1.0) {
+                return Step::Converged;
+            }
+            // A clearly negative multiplier: this guess is wrong, change it now.
+            if it >= 1 {
+                let numax = self.nu[..nc]
+                    .iter()
+                    .fold(f64::MIN_POSITIVE, |a, v| a.max(v.abs()));
+                let negative = self.nu[..nc].iter().any(|&v| v < -1e-6 * numax);
+                if negative {
+                    return Step::Negative;
+                }
+            }
+        }
+        Step::Failed
+    }
+}
+
+fn column(m: &Matrix, j: usize) -> Vec<f64> {
+    (0..m.nrows()).map(|i| m[(i, j)]).collect()
+}
+
+fn soc_norm(v: &[f64]) -> f64 {
+    v.iter().map(|a| a * a).sum::<f64>().sqrt()
+}
