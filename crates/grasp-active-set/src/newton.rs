@@ -300,6 +300,29 @@ impl Newton {
         }
     }
 
+    /// `Σ |c_j|` of the first `nc` Newton constraints at the trial point in `t`.
+    fn violation(&self, nc: usize) -> f64 {
+        let n = self.n;
+        let y = &self.t[..n];
+        let mut v = 0.0;
+        for r in 0..nc {
+            v += match self.owner[r] {
+                Owner::Row(i) => (self.b_red[i] - dot4(self.a_red.row(i), y)).abs(),
+                Owner::Cone(k) => {
+                    let (start, dim) = self.socs[k];
+                    let s0 = self.b_red[start] - dot4(self.a_red.row(start), y);
+                    let mut q = 0.0;
+                    for j in 1..dim {
+                        let sj = self.b_red[start + j] - dot4(self.a_red.row(start + j), y);
+                        q += sj * sj;
+                    }
+                    (q.sqrt() - s0).abs()
+                }
+            };
+        }
+        v
+    }
+
     /// `s = b − A x` on the inequality rows, in the reduced variables.
     fn slacks(&mut self) {
         for i in self.eq..self.s.len() {
@@ -448,11 +471,36 @@ impl Newton {
                 }
             }
             backward(&self.h, n, &mut self.dx);
-            for r in 0..nc {
-                match self.owner[r] {
-                    Owner::Row(i) => self.nu_row[i] = self.nu[r],
-                    Owner::Cone(k) => self.nu_cone[k] = self.nu[r],
+            // Globalised by backtracking on the ℓ1 merit ‖y‖² + ρ Σ|c_j(y)|, ρ above
+            // every multiplier; a full step is also taken when it at least halves the
+            // constraint violation (it is Newton's, and the merit alone would refuse
+            // full steps near the boundary's curvature).
+            let rho = 2.0 * self.nu[..nc].iter().fold(0.0f64, |a, v| a.max(v.abs())) + 1e-12;
+            let viol0: f64 = self.cval[..nc].iter().map(|v| v.abs()).sum();
+            let f0: f64 = self.y.iter().map(|v| v * v).sum();
+            let slope = 2.0 * dot4(&self.y, &self.dx) - rho * viol0;
+            let mut alpha = 1.0;
+            for _ in 0..30 {
+                for (t, (y, d)) in self.t[..n].iter_mut().zip(self.y.iter().zip(&self.dx)) {
+                    *t = y + alpha * d;
                 }
+                let viol = self.violation(nc);
+                let f: f64 = self.t[..n].iter().map(|v| v * v).sum();
+                let armijo = f + rho * viol <= f0 + rho * viol0 + 1e-4 * alpha * slope.min(0.0);
+                if (alpha == 1.0 && viol <= 0.5 * viol0) || armijo {
+                    break;
+                }
+                alpha *= 0.5;
+            }
+            for r in 0..nc {
+                let old = match self.owner[r] {
+                    Owner::Row(i) => &mut self.nu_row[i],
+                    Owner::Cone(k) => &mut self.nu_cone[k],
+                };
+                *old += alpha * (self.nu[r] - *old);
+            }
+            for d in self.dx.iter_mut() {
+                *d *= alpha;
             }
             for (y, d) in self.y.iter_mut().zip(&self.dx) {
                 *y += d;
