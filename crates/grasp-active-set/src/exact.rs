@@ -234,12 +234,35 @@ impl ExactSolver {
             *x = self.lin.torque[j] * self.conic.col_scale[j] / alpha;
         }
         nw.reset_multipliers();
+        // Multipliers from the inscribed ones (for Σ w τ²; in the scaled form a row's is
+        // μ/(α κ ρ)): a shared row's directly; a cone's from its faces, whose fz
+        // coefficient is 1, through the cone's head row (mu·fz, or fz for SFCe), so
+        // that the first Newton step already has the cone's curvature.
+        let ak = alpha * self.conic.kappa;
+        let mu = &self.lin.multipliers;
+        if mu.len() == self.inner_row.len() {
+            for &i in self.lin.active_set.as_deref().unwrap_or(&[]) {
+                if let Some(r) = self.inner_row[i] {
+                    nw.nu_row[r] = mu[i] / (ak * self.conic.row_scale[r - self.conic.linear_at]);
+                }
+                if let Some((c, g)) = self.inner_face[i] {
+                    let head = match self.qp.contacts[c].model {
+                        ContactModel::Pcwf { mu } | ContactModel::SfcLinear { mu, .. } => mu,
+                        _ => 1.0,
+                    };
+                    if let Some(k) = self.soc_group.iter().position(|&p| p == (c, g)) {
+                        nw.nu_cone[k] += mu[i] / (ak * head);
+                    }
+                }
+            }
+        }
         true
     }
 
-    /// Newton from its current state; on a certified answer fills `out`.
-    fn try_newton(&mut self, alpha: f64, out: &mut Solution) -> bool {
-        let ok = self.newton.solve(&self.conic, &self.b);
+    /// Newton from its current state (`hot`: a warm re-solve of the last answer's
+    /// pieces); on a certified answer fills `out`.
+    fn try_newton(&mut self, alpha: f64, hot: bool, out: &mut Solution) -> bool {
+        let ok = self.newton.solve(&self.conic, &self.b, hot);
         out.iterations += self.newton.iterations;
         if ok {
             self.certificate = self.conic.certificate(
@@ -307,7 +330,7 @@ impl TorqueSolver for ExactSolver {
         // solution scales with 1/α).
         if let (false, Some(prev)) = (warm.is_cold(), self.hot) {
             self.newton.rescale(prev / alpha);
-            if self.try_newton(alpha, out) {
+            if self.try_newton(alpha, true, out) {
                 return;
             }
         }
@@ -316,7 +339,7 @@ impl TorqueSolver for ExactSolver {
             .solve_raw(w, &WarmStart::default(), &mut self.lin);
         out.iterations += self.lin.iterations;
         let feasible = self.lin.status == Status::Optimal;
-        if feasible && self.guess(alpha) && self.try_newton(alpha, out) {
+        if feasible && self.guess(alpha) && self.try_newton(alpha, false, out) {
             return;
         }
         if self.lin.status == Status::Infeasible {

@@ -70,8 +70,8 @@ pub(crate) struct Newton {
     /// Per second-order cone.
     pub(crate) piece: Vec<Piece>,
     /// Multipliers per row and per cone.
-    nu_row: Vec<f64>,
-    nu_cone: Vec<f64>,
+    pub(crate) nu_row: Vec<f64>,
+    pub(crate) nu_cone: Vec<f64>,
     /// The consistency equalities eliminated once per grasp: `x = x_p + N y` with
     /// `x_p = E⁺ b_E` (orthogonal to N), so the objective is `‖y‖²` plus a constant.
     null_basis: Matrix,
@@ -86,6 +86,9 @@ pub(crate) struct Newton {
     pub(crate) x: Vec<f64>,
     pub(crate) z: Vec<f64>,
     pub(crate) iterations: usize,
+    /// The constraint count of the last converged Newton step, whose factors (`h`,
+    /// `ycols`, `schur`) and constraint owners are kept for a chord re-solve.
+    frozen: Option<usize>,
     s: Vec<f64>,
     h: Vec<f64>,
     c: Vec<f64>,
@@ -149,6 +152,7 @@ impl Newton {
             x: vec![0.0; form.nx],
             z: vec![0.0; rows],
             iterations: 0,
+            frozen: None,
             s: vec![0.0; rows],
             h: vec![0.0; n * n],
             c: vec![0.0; ncmax * n],
@@ -177,13 +181,18 @@ impl Newton {
 
     /// Clears multipliers before a new guess.
     pub(crate) fn reset_multipliers(&mut self) {
+        self.frozen = None;
         self.nu_row.iter_mut().for_each(|v| *v = 0.0);
         self.nu_cone.iter_mut().for_each(|v| *v = 0.0);
     }
 
     /// Solves from `self.x` and the guess in `active`/`piece`; on success `x` and `z`
     /// hold a primal-dual pair for the caller's certificate.
-    pub(crate) fn solve(&mut self, form: &ConicForm, b: &[f64]) -> bool {
+    ///
+    /// With `hot`, the first guess is solved by chord iterations on the factors of the
+    /// last converged Newton step (a warm re-solve with the same pieces), falling back
+    /// to Newton's method.
+    pub(crate) fn solve(&mut self, form: &ConicForm, b: &[f64], hot: bool) -> bool {
         self.iterations = 0;
         if self.null_basis.nrows() != form.nx || form.free > 0 {
             // The equalities could not be eliminated (or free internal forces, which
@@ -198,11 +207,21 @@ impl Newton {
         for i in self.eq..b.len() {
             self.b_red[i] = b[i] - dot4(form.a.row(i), &self.xp);
         }
-        for (j, y) in self.y.iter_mut().enumerate() {
-            *y = (0..nx).map(|i| self.null_basis[(i, j)] * self.x[i]).sum();
+        self.y.iter_mut().for_each(|v| *v = 0.0);
+        for i in 0..nx {
+            let xi = self.x[i];
+            for (y, nb) in self.y.iter_mut().zip(self.null_basis.row(i)) {
+                *y += xi * nb;
+            }
         }
-        for _ in 0..MAX_CHANGES {
-            let end = self.newton();
+        for change in 0..MAX_CHANGES {
+            let end = match (hot && change == 0, self.frozen) {
+                (true, Some(nc)) => match self.chord(nc) {
+                    Step::Converged => Step::Converged,
+                    _ => self.newton(),
+                },
+                _ => self.newton(),
+            };
             if end == Step::Failed {
                 return false;
             }
@@ -233,6 +252,7 @@ impl Newton {
                     Owner::Row(i) => self.active[i] = true,
                     Owner::Cone(k) => self.piece[k] = Piece::Boundary,
                 }
+                self.frozen = None;
                 continue;
             }
             // The most negative multiplier leaves.
@@ -263,7 +283,11 @@ impl Newton {
                     Owner::Row(i) => self.active[i] = false,
                     Owner::Cone(k) => self.piece[k] = Piece::Inside,
                 }
+                self.frozen = None;
                 continue;
+            }
+            if end != Step::Converged {
+                return false;
             }
             self.finish(form);
             return true;
@@ -295,8 +319,13 @@ impl Newton {
                 }
             }
         }
-        for i in 0..self.eq {
-            self.z[i] = -(0..nx).map(|j| self.e_pinv[(j, i)] * g[j]).sum::<f64>();
+        let eq = self.eq;
+        self.z[..eq].iter_mut().for_each(|v| *v = 0.0);
+        for j in 0..nx {
+            let gj = g[j];
+            for (z, e) in self.z[..eq].iter_mut().zip(self.e_pinv.row(j)) {
+                *z -= gj * e;
+            }
         }
     }
 
@@ -348,6 +377,86 @@ impl Newton {
                 }
             }
         }
+    }
+
+    /// Chord iterations: the KKT residual at the current point, solved with the frozen
+    /// factors of the last Newton step (`nc` constraints, same owners). Its fixed point
+    /// is the KKT point of the current guess; it converges linearly, at the rate of the
+    /// change in H and C since the factorisation (small after a small wrench change),
+    /// each iteration O(k² + nc·k).
+    fn chord(&mut self, nc: usize) -> Step {
+        let n = self.n;
+        for _ in 0..MAX_NEWTON {
+            self.iterations += 1;
+            self.slacks();
+            // t = −(P y + Σ ν_r ∇c_r(y)), cval = c(y).
+            for j in 0..n {
+                self.t[j] = -2.0 * self.y[j];
+            }
+            for r in 0..nc {
+                match self.owner[r] {
+                    Owner::Row(i) => {
+                        self.cval[r] = -self.s[i];
+                        let nu = self.nu_row[i];
+                        for (t, a) in self.t[..n].iter_mut().zip(self.a_red.row(i)) {
+                            *t -= nu * a;
+                        }
+                    }
+                    Owner::Cone(k) => {
+                        let (start, dim) = self.socs[k];
+                        let rr = soc_norm(&self.s[start + 1..start + dim]);
+                        if rr.is_nan() || rr <= 1e-12 * (self.s[start].abs() + rr) {
+                            return Step::Failed;
+                        }
+                        self.cval[r] = rr - self.s[start];
+                        let nu = self.nu_cone[k];
+                        for (t, a) in self.t[..n].iter_mut().zip(self.a_red.row(start)) {
+                            *t -= nu * a;
+                        }
+                        for j in 1..dim {
+                            let c = nu * self.s[start + j] / rr;
+                            for (t, a) in self.t[..n].iter_mut().zip(self.a_red.row(start + j)) {
+                                *t += c * a;
+                            }
+                        }
+                    }
+                }
+            }
+            // dν = S⁻¹(Yᵀ L⁻¹ t + c), dy = L⁻ᵀ(L⁻¹ t − Y dν).
+            forward(&self.h, n, &mut self.t[..n]);
+            for r in 0..nc {
+                self.nu[r] = dot4(&self.ycols[r * n..r * n + n], &self.t[..n]) + self.cval[r];
+            }
+            if nc > 0 {
+                forward(&self.schur[..nc * nc], nc, &mut self.nu[..nc]);
+                backward(&self.schur[..nc * nc], nc, &mut self.nu[..nc]);
+            }
+            self.dx.copy_from_slice(&self.t[..n]);
+            for r in 0..nc {
+                let v = self.nu[r];
+                for (d, y) in self.dx.iter_mut().zip(&self.ycols[r * n..r * n + n]) {
+                    *d -= v * y;
+                }
+            }
+            backward(&self.h, n, &mut self.dx);
+            for r in 0..nc {
+                match self.owner[r] {
+                    Owner::Row(i) => self.nu_row[i] += self.nu[r],
+                    Owner::Cone(k) => self.nu_cone[k] += self.nu[r],
+                }
+            }
+            for (y, d) in self.y.iter_mut().zip(&self.dx) {
+                *y += d;
+            }
+            if !self.y.iter().all(|v| v.is_finite()) {
+                return Step::Failed;
+            }
+            // Linear convergence: stop well below the accuracy Newton's stop reaches.
+            if norm_inf(&self.dx) <= 1e-13 * norm_inf(&self.y).max(1.0) {
+                return Step::Converged;
+            }
+        }
+        Step::Failed
     }
 
     /// Newton's method on the current guess.
@@ -511,14 +620,19 @@ impl Newton {
             // Converged: with every multiplier of the right sign the Hessian is exact
             // and the error after this step is of the order of its square.
             if norm_inf(&self.dx) <= 1e-10 * norm_inf(&self.y).max(1.0) {
+                self.frozen = Some(nc);
                 return Step::Converged;
             }
             // A clearly negative multiplier: this guess is wrong, change it now.
             if it >= 1 {
-                let numax = self.nu[..nc]
-                    .iter()
-                    .fold(f64::MIN_POSITIVE, |a, v| a.max(v.abs()));
-                let negative = self.nu[..nc].iter().any(|&v| v < -1e-6 * numax);
+                // On the multipliers as stored (damped by the step), which the caller's
+                // correction reads.
+                let stored = |r: usize| match self.owner[r] {
+                    Owner::Row(i) => self.nu_row[i],
+                    Owner::Cone(k) => self.nu_cone[k],
+                };
+                let numax = (0..nc).fold(f64::MIN_POSITIVE, |a, r| a.max(stored(r).abs()));
+                let negative = (0..nc).any(|r| stored(r) < -1e-6 * numax);
                 if negative {
                     return Step::Negative;
                 }

@@ -324,20 +324,18 @@ impl ConicForm {
         let (s, rest) = scratch.split_at_mut(rows);
         let (size, rest) = rest.split_at_mut(rows);
         let (grad, gsize) = rest.split_at_mut(self.nx);
-        // s = b − A x, with the size of each row's terms.
+        // s = b − A x, with the size of each row's terms, in one pass.
         let mut primal = 0.0f64;
         let mut start = 0;
         for i in 0..rows {
-            let ax = dot(self.a.row(i), x);
+            let (mut ax, mut abs) = (0.0, 0.0);
+            for (a, v) in self.a.row(i).iter().zip(x) {
+                let t = a * v;
+                ax += t;
+                abs += t.abs();
+            }
             s[i] = b[i] - ax;
-            size[i] = b[i].abs()
-                + self
-                    .a
-                    .row(i)
-                    .iter()
-                    .zip(x)
-                    .map(|(a, v)| (a * v).abs())
-                    .sum::<f64>();
+            size[i] = b[i].abs() + abs;
         }
         let scale = size.iter().copied().fold(f64::MIN_POSITIVE, f64::max);
         let zscale = z.iter().fold(f64::MIN_POSITIVE, |a, v| a.max(v.abs()));
@@ -371,10 +369,12 @@ impl ConicForm {
             grad[j] = 2.0 * x[j];
             gsize[j] = (2.0 * x[j]).abs();
         }
-        for i in 0..rows {
-            for (j, a) in self.a.row(i).iter().enumerate() {
-                grad[j] += a * z[i];
-                gsize[j] += (a * z[i]).abs();
+        // Only the rows with a multiplier contribute (most are inactive, z = 0).
+        for i in (0..rows).filter(|&i| z[i] != 0.0) {
+            for ((g, gs), a) in grad.iter_mut().zip(gsize.iter_mut()).zip(self.a.row(i)) {
+                let t = a * z[i];
+                *g += t;
+                *gs += t.abs();
             }
         }
         for j in 0..self.nx {
