@@ -46,6 +46,8 @@ enum Step {
     Converged,
     /// A multiplier of the wrong sign: drop it before converging.
     Negative,
+    /// An inactive piece violated far beyond the step: add it before converging.
+    Violated,
     Failed,
 }
 
@@ -226,9 +228,7 @@ impl Newton {
                 return false;
             }
             self.slacks();
-            // Scaled data: b has size 1, so absolute tolerances are relative ones.
-            let size = norm_inf(&self.x).max(1.0);
-            let feas = 1e-10 * size;
+            let feas = self.feasibility_tolerance();
             // The most violated inactive piece joins.
             let mut worst: Option<(f64, Owner)> = None;
             for i in self.orth.0..self.orth.1 {
@@ -247,7 +247,7 @@ impl Newton {
                     }
                 }
             }
-            if let (Step::Converged, Some((_, o))) = (end, worst) {
+            if let (Step::Converged | Step::Violated, Some((_, o))) = (end, worst) {
                 match o {
                     Owner::Row(i) => self.active[i] = true,
                     Owner::Cone(k) => self.piece[k] = Piece::Boundary,
@@ -350,6 +350,27 @@ impl Newton {
             };
         }
         v
+    }
+
+    /// Scaled data: b has size 1, so absolute tolerances are relative ones.
+    fn feasibility_tolerance(&self) -> f64 {
+        1e-10 * norm_inf(&self.y).max(1.0)
+    }
+
+    /// The largest violation of an inactive piece at the current slacks.
+    fn worst_inactive(&self) -> f64 {
+        let mut worst = 0.0f64;
+        for i in self.orth.0..self.orth.1 {
+            if !self.active[i] {
+                worst = worst.max(-self.s[i]);
+            }
+        }
+        for (k, &(start, dim)) in self.socs.iter().enumerate() {
+            if self.piece[k] == Piece::Inside {
+                worst = worst.max(soc_norm(&self.s[start + 1..start + dim]) - self.s[start]);
+            }
+        }
+        worst
     }
 
     /// `s = b − A x` on the inequality rows, in the reduced variables.
@@ -462,9 +483,17 @@ impl Newton {
     /// Newton's method on the current guess.
     fn newton(&mut self) -> Step {
         let n = self.n;
+        let mut last_step = f64::INFINITY;
         for it in 0..MAX_NEWTON {
             self.iterations += 1;
             self.slacks();
+            // Converging this guess cannot remove a violation far beyond the step.
+            if it >= 2 {
+                let v = self.worst_inactive();
+                if v > self.feasibility_tolerance() && v > 100.0 * last_step {
+                    return Step::Violated;
+                }
+            }
             // Constraint rows C and values c(x).
             let mut nc = 0;
             for i in self.orth.0..self.orth.1 {
@@ -614,6 +643,7 @@ impl Newton {
             for (y, d) in self.y.iter_mut().zip(&self.dx) {
                 *y += d;
             }
+            last_step = norm_inf(&self.dx);
             if !self.y.iter().all(|v| v.is_finite()) {
                 return Step::Failed;
             }

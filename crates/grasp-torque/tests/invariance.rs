@@ -438,3 +438,32 @@ fn a_nearly_singular_finger_jacobian() {
         s.status
     );
 }
+
+/// SFCl contacts at the kink of their cone: a symmetric squeeze with no load about the
+/// normals leaves `mz = 0` at the optimum, where both of the cone's smooth pieces meet.
+/// The native exact solver agrees with Clarabel there (through `agree`).
+#[test]
+fn sfcl_contacts_at_the_kink_of_their_cone() {
+    let contacts = r#"[
+      {"position": [0.03, 0, 0], "normal": [-1, 0, 0], "model": "sfcl", "mu": 0.5, "mu_torsion": 0.01, "finger": 0},
+      {"position": [-0.03, 0, 0], "normal": [1, 0, 0], "model": "sfcl", "mu": 0.5, "mu_torsion": 0.01, "finger": 1},
+      {"position": [0, 0, 0.03], "normal": [0, 0, -1], "model": "sfcl", "mu": 0.5, "mu_torsion": 0.01, "finger": 2}
+    ]"#;
+    let p = geometry(contacts, THREE_FINGERS, [0.0, 0.0, -1.0, 0.0, 0.0, 0.0]);
+    let s = agree(&p);
+    assert!(s.is_optimal(), "{:?}", s.reason);
+    let exact = run(&p, Backend::ActiveSet, true);
+    assert!(exact.is_optimal(), "{:?}", exact.reason);
+    let fmax = exact
+        .contact_forces
+        .iter()
+        .fold(0.0f64, |a, v| a.max(v.abs()));
+    let kinks = (0..3)
+        .filter(|c| exact.contact_forces[4 * c + 3].abs() <= 1e-9 * fmax)
+        .count();
+    assert!(
+        kinks >= 1,
+        "no contact at mz = 0: {:?}",
+        exact.contact_forces
+    );
+}
