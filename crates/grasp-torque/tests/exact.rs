@@ -1,14 +1,17 @@
 //! The native exact-cone solver against independent answers: the reference optima of
 //! `shared/reference/cases.json`, Clarabel's exact cones, every linearisation (the
 //! inscribed polyhedra lie inside the cones, so σ* ≤ σ(N), and they converge to σ*),
-//! and a robustness sweep at normal and at a quarter of the friction.
-#![cfg(all(feature = "active-set", feature = "clarabel"))]
+//! and a robustness sweep at normal and at a quarter of the friction. The tests that
+//! need no Clarabel also run in the native-only build.
+#![cfg(feature = "active-set")]
 
+#[cfg(feature = "clarabel")]
 use grasp_testkit::{synthetic_grasp, Rng, SynthSpec};
 use grasp_torque::{
-    solve, Backend, Cones, ContactModel, GraspProblem, GraspSolver, Reason, Solution, SolverConfig,
-    Status, WarmStart,
+    solve, Backend, Cones, GraspProblem, GraspSolver, Solution, SolverConfig, Status, WarmStart,
 };
+#[cfg(feature = "clarabel")]
+use grasp_torque::{ContactModel, Reason};
 
 fn run(p: &GraspProblem, backend: Backend, cones: Cones) -> Solution {
     let c = SolverConfig {
@@ -63,6 +66,7 @@ fn exact_cones_use_the_native_solver_by_default() {
 }
 
 /// A random grasp at friction scaled by `friction`, its wrench perturbed.
+#[cfg(feature = "clarabel")]
 fn grasp(seed: u64, friction: f64) -> GraspProblem {
     let mut p = synthetic_grasp(seed, &SynthSpec::default())
         .into_problem()
@@ -93,6 +97,7 @@ fn grasp(seed: u64, friction: f64) -> GraspProblem {
 /// no `optimal` answer that Clarabel calls infeasible or that disagrees with Clarabel's
 /// (1e-7 relative), none above a linearisation's σ(N), and the same status as Clarabel
 /// wherever Clarabel is decisive. Reports how often each path decided.
+#[cfg(feature = "clarabel")]
 #[test]
 fn robustness_sweep_against_clarabel_and_the_linearisations() {
     // Optimal, infeasible by the N = 8 circumscribed cones, by N = 256, other, and an
@@ -209,6 +214,7 @@ fn refining_the_linearisation_converges_to_the_native_optimum() {
 
 /// Warm and cold solves agree, and a controller's `resolve` after a 1 % wrench change
 /// gives Clarabel's answer.
+#[cfg(feature = "clarabel")]
 #[test]
 fn resolve_in_a_control_loop_matches_cold_solves() {
     let p = grasp_torque::load_problem(concat!(
@@ -230,5 +236,42 @@ fn resolve_in_a_control_loop_matches_cold_solves() {
         let cold = run(&q, Backend::Clarabel, Cones::Exact);
         assert_eq!(warm.status, cold.status);
         assert!(rel(warm.objective, cold.objective) < 1e-7);
+    }
+}
+
+/// A control loop of warm re-solves (the hot path: chord iterations on the kept Newton
+/// factors) gives the cold answers, on every bundled fixture, without Clarabel.
+#[test]
+fn warm_and_cold_solves_agree() {
+    for name in [
+        "paper-example",
+        "hand3-pcwf",
+        "hand4-sfcl",
+        "hand4-sfce",
+        "hand5-mixed",
+    ] {
+        let path = format!("{}/../../fixtures/{name}.json", env!("CARGO_MANIFEST_DIR"));
+        let p = grasp_torque::load_problem(&path).unwrap();
+        let c = SolverConfig {
+            cones: Cones::Exact,
+            ..Default::default()
+        };
+        let mut ctl = GraspSolver::new(&p, &c).unwrap();
+        let mut cold = GraspSolver::new(&p, &c).unwrap();
+        let mut w = p.wrench;
+        for k in 0..30 {
+            w[k % 6] *= 1.0 + 0.01 * ((k as f64) * 0.7).sin();
+            let warm = ctl.resolve(&w).unwrap().clone();
+            let fresh = cold.solve(&w, &WarmStart::default()).unwrap();
+            assert_eq!(warm.status, fresh.status, "{name} step {k}");
+            if fresh.is_optimal() {
+                assert!(
+                    rel(warm.objective, fresh.objective) < 1e-9,
+                    "{name} step {k}: {} vs {}",
+                    warm.objective,
+                    fresh.objective
+                );
+            }
+        }
     }
 }
