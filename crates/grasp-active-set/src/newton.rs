@@ -78,8 +78,9 @@ pub(crate) struct Newton {
     /// `x_p = E⁺ b_E` (orthogonal to N), so the objective is `‖y‖²` plus a constant.
     null_basis: Matrix,
     e_pinv: Matrix,
-    /// Rows of A times N (rows × k; the equality rows are unused).
+    /// Rows of A times N (rows × k) and times E⁺ (rows × p); the equality rows unused.
     a_red: Matrix,
+    a_epinv: Matrix,
     /// `b − A x_p`, per solve.
     b_red: Vec<f64>,
     xp: Vec<f64>,
@@ -123,7 +124,8 @@ impl Newton {
             // The core hands over independent, normalised equality rows.
             match decompose(&e, RankThreshold::Relative(1e-13)) {
                 Ok(d) if d.rank() == eq => (d.null_basis.clone(), d.pseudo_inverse()),
-                _ => (Matrix::zeros(n, 0), Matrix::zeros(n, eq)),
+                // Not eliminable: an empty basis marks Newton unusable (see `solve`).
+                _ => (Matrix::zeros(0, 0), Matrix::zeros(n, eq)),
             }
         };
         let k = null_basis.ncols();
@@ -134,9 +136,17 @@ impl Newton {
                 dot4(form.a.row(i), &column(&null_basis, j))
             }
         });
+        let a_epinv = Matrix::from_fn(rows, eq, |i, j| {
+            if i < eq || e_pinv.ncols() != eq {
+                0.0
+            } else {
+                dot4(form.a.row(i), &column(&e_pinv, j))
+            }
+        });
         let n = k;
         let ncmax = (orth.1 - orth.0) + socs.len();
         Self {
+            a_epinv,
             null_basis,
             e_pinv,
             a_red,
@@ -201,13 +211,14 @@ impl Newton {
             // carry no curvature): the interior-point method's case.
             return false;
         }
-        // x_p = E⁺ b_E, b_red = b − A x_p, y = Nᵀ x.
+        // x_p = E⁺ b_E, b_red = b − (A E⁺) b_E, y = Nᵀ x.
         let nx = form.nx;
+        let be = &b[..self.eq];
         for j in 0..nx {
-            self.xp[j] = dot4(self.e_pinv.row(j), &b[..self.eq]);
+            self.xp[j] = dot4(self.e_pinv.row(j), be);
         }
         for i in self.eq..b.len() {
-            self.b_red[i] = b[i] - dot4(form.a.row(i), &self.xp);
+            self.b_red[i] = b[i] - dot4(self.a_epinv.row(i), be);
         }
         self.y.iter_mut().for_each(|v| *v = 0.0);
         for i in 0..nx {
