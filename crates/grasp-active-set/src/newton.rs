@@ -654,13 +654,18 @@ impl Newton {
             for (y, d) in self.y.iter_mut().zip(&self.dx) {
                 *y += d;
             }
-            last_step = norm_inf(&self.dx);
+            let step = norm_inf(&self.dx);
+            let previous = last_step;
+            last_step = step;
             if !self.y.iter().all(|v| v.is_finite()) {
                 return Step::Failed;
             }
             // Converged: with every multiplier of the right sign the Hessian is exact
-            // and the error after this step is of the order of its square.
-            if norm_inf(&self.dx) <= 1e-10 * norm_inf(&self.y).max(1.0) {
+            // and the error after this step is of the order of its square — so a full
+            // step of 1e-7 that shrank ×100 from the last leaves an error near 1e-14.
+            let scale = norm_inf(&self.y).max(1.0);
+            let quadratic = alpha == 1.0 && step <= 1e-7 * scale && step <= 1e-2 * previous;
+            if step <= 1e-10 * scale || quadratic {
                 self.frozen = Some(nc);
                 return Step::Converged;
             }
