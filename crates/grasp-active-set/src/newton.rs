@@ -411,6 +411,29 @@ impl Newton {
         }
     }
 
+    /// The KKT system `[H Cᵀ; C 0] [dy; ν] = [t; −c]` with the factors in `h`
+    /// (L), `ycols` (Y = L⁻¹Cᵀ) and `schur` (of YᵀY): `ν = S⁻¹(Yᵀ L⁻¹ t + c)`,
+    /// `dy = L⁻ᵀ(L⁻¹ t − Y ν)`, into `nu` and `dx` (`t` is overwritten).
+    fn solve_kkt(&mut self, nc: usize) {
+        let n = self.n;
+        forward(&self.h, n, &mut self.t[..n]);
+        for r in 0..nc {
+            self.nu[r] = dot4(&self.ycols[r * n..r * n + n], &self.t[..n]) + self.cval[r];
+        }
+        if nc > 0 {
+            forward(&self.schur[..nc * nc], nc, &mut self.nu[..nc]);
+            backward(&self.schur[..nc * nc], nc, &mut self.nu[..nc]);
+        }
+        self.dx.copy_from_slice(&self.t[..n]);
+        for r in 0..nc {
+            let v = self.nu[r];
+            for (d, y) in self.dx.iter_mut().zip(&self.ycols[r * n..r * n + n]) {
+                *d -= v * y;
+            }
+        }
+        backward(&self.h, n, &mut self.dx);
+    }
+
     /// Chord iterations: the KKT residual at the current point, solved with the frozen
     /// factors of the last Newton step (`nc` constraints, same owners). Its fixed point
     /// is the KKT point of the current guess; it converges linearly, at the rate of the
@@ -454,23 +477,7 @@ impl Newton {
                     }
                 }
             }
-            // dν = S⁻¹(Yᵀ L⁻¹ t + c), dy = L⁻ᵀ(L⁻¹ t − Y dν).
-            forward(&self.h, n, &mut self.t[..n]);
-            for r in 0..nc {
-                self.nu[r] = dot4(&self.ycols[r * n..r * n + n], &self.t[..n]) + self.cval[r];
-            }
-            if nc > 0 {
-                forward(&self.schur[..nc * nc], nc, &mut self.nu[..nc]);
-                backward(&self.schur[..nc * nc], nc, &mut self.nu[..nc]);
-            }
-            self.dx.copy_from_slice(&self.t[..n]);
-            for r in 0..nc {
-                let v = self.nu[r];
-                for (d, y) in self.dx.iter_mut().zip(&self.ycols[r * n..r * n + n]) {
-                    *d -= v * y;
-                }
-            }
-            backward(&self.h, n, &mut self.dx);
+            self.solve_kkt(nc);
             for r in 0..nc {
                 match self.owner[r] {
                     Owner::Row(i) => self.nu_row[i] += self.nu[r],
@@ -603,23 +610,7 @@ impl Newton {
             for j in 0..n {
                 self.t[j] = -2.0 * self.y[j];
             }
-            forward(&self.h, n, &mut self.t[..n]);
-            // S ν = Yᵀ t + c(x); dx = L⁻ᵀ (t − Y ν).
-            for r in 0..nc {
-                self.nu[r] = dot4(&self.ycols[r * n..r * n + n], &self.t[..n]) + self.cval[r];
-            }
-            if nc > 0 {
-                forward(&self.schur[..nc * nc], nc, &mut self.nu[..nc]);
-                backward(&self.schur[..nc * nc], nc, &mut self.nu[..nc]);
-            }
-            self.dx.copy_from_slice(&self.t[..n]);
-            for r in 0..nc {
-                let v = self.nu[r];
-                for (d, y) in self.dx.iter_mut().zip(&self.ycols[r * n..r * n + n]) {
-                    *d -= v * y;
-                }
-            }
-            backward(&self.h, n, &mut self.dx);
+            self.solve_kkt(nc);
             // Globalised by backtracking on the ℓ1 merit ‖y‖² + ρ Σ|c_j(y)|, ρ above
             // every multiplier; a full step is also taken when it at least halves the
             // constraint violation (it is Newton's, and the merit alone would refuse

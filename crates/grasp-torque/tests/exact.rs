@@ -24,6 +24,20 @@ fn run(p: &GraspProblem, backend: Backend, cones: Cones) -> Solution {
     solve(s.as_mut(), &p.wrench, &WarmStart::default()).unwrap()
 }
 
+/// A bundled fixture.
+fn fixture(name: &str) -> GraspProblem {
+    let path = format!("{}/../../fixtures/{name}.json", env!("CARGO_MANIFEST_DIR"));
+    grasp_torque::load_problem(&path).unwrap()
+}
+
+/// Exact cones on the default (native) backend.
+fn exact_config() -> SolverConfig {
+    SolverConfig {
+        cones: Cones::Exact,
+        ..Default::default()
+    }
+}
+
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
 }
@@ -50,16 +64,8 @@ fn reference_exact_objectives_are_reproduced_natively() {
 /// `solve FILE --cones exact` picks the native solver by default.
 #[test]
 fn exact_cones_use_the_native_solver_by_default() {
-    let p = grasp_torque::load_problem(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../fixtures/hand4-sfce.json"
-    ))
-    .unwrap();
-    let c = SolverConfig {
-        cones: Cones::Exact,
-        ..Default::default()
-    };
-    let mut s = GraspSolver::new(&p, &c).unwrap();
+    let p = fixture("hand4-sfce");
+    let mut s = GraspSolver::new(&p, &exact_config()).unwrap();
     assert_eq!(s.backend_name(), "active-set");
     let sol = s.solve(&p.wrench, &WarmStart::default()).unwrap();
     assert_eq!(sol.status, Status::Optimal);
@@ -178,8 +184,7 @@ fn refining_the_linearisation_converges_to_the_native_optimum() {
         "hand4-sfce",
         "hand5-mixed",
     ] {
-        let path = format!("{}/../../fixtures/{name}.json", env!("CARGO_MANIFEST_DIR"));
-        let mut p = grasp_torque::load_problem(&path).unwrap();
+        let mut p = fixture(name);
         let exact = run(&p, Backend::ActiveSet, Cones::Exact);
         assert_eq!(exact.status, Status::Optimal, "{name}");
         assert!(
@@ -217,16 +222,8 @@ fn refining_the_linearisation_converges_to_the_native_optimum() {
 #[cfg(feature = "clarabel")]
 #[test]
 fn resolve_in_a_control_loop_matches_cold_solves() {
-    let p = grasp_torque::load_problem(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../fixtures/hand5-mixed.json"
-    ))
-    .unwrap();
-    let c = SolverConfig {
-        cones: Cones::Exact,
-        ..Default::default()
-    };
-    let mut ctl = GraspSolver::new(&p, &c).unwrap();
+    let p = fixture("hand5-mixed");
+    let mut ctl = GraspSolver::new(&p, &exact_config()).unwrap();
     let mut w = p.wrench;
     for k in 0..20 {
         w[k % 6] *= 1.01;
@@ -250,14 +247,9 @@ fn warm_and_cold_solves_agree() {
         "hand4-sfce",
         "hand5-mixed",
     ] {
-        let path = format!("{}/../../fixtures/{name}.json", env!("CARGO_MANIFEST_DIR"));
-        let p = grasp_torque::load_problem(&path).unwrap();
-        let c = SolverConfig {
-            cones: Cones::Exact,
-            ..Default::default()
-        };
-        let mut ctl = GraspSolver::new(&p, &c).unwrap();
-        let mut cold = GraspSolver::new(&p, &c).unwrap();
+        let p = fixture(name);
+        let mut ctl = GraspSolver::new(&p, &exact_config()).unwrap();
+        let mut cold = GraspSolver::new(&p, &exact_config()).unwrap();
         let mut w = p.wrench;
         for k in 0..30 {
             w[k % 6] *= 1.0 + 0.01 * ((k as f64) * 0.7).sin();
