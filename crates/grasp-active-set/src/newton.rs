@@ -441,6 +441,7 @@ impl Newton {
     /// each iteration O(k² + nc·k).
     fn chord(&mut self, nc: usize) -> Step {
         let n = self.n;
+        let mut previous = f64::INFINITY;
         for _ in 0..MAX_NEWTON {
             self.iterations += 1;
             self.slacks();
@@ -490,8 +491,19 @@ impl Newton {
             if !self.y.iter().all(|v| v.is_finite()) {
                 return Step::Failed;
             }
-            // Linear convergence: stop well below the accuracy Newton's stop reaches.
-            if norm_inf(&self.dx) <= 1e-13 * norm_inf(&self.y).max(1.0) {
+            // Linear convergence at rate ρ leaves an error of about ρ/(1−ρ) × the step:
+            // stop when that is below 1e-13 (or the step itself is).
+            let (step, scale) = (norm_inf(&self.dx), norm_inf(&self.y).max(1.0));
+            // (No rate before a second step: the first has nothing to compare with.)
+            let rate = if previous.is_finite() {
+                step / previous
+            } else {
+                f64::NAN
+            };
+            previous = step;
+            let settled =
+                rate.is_finite() && rate < 0.5 && step * rate / (1.0 - rate) <= 1e-13 * scale;
+            if step <= 1e-13 * scale || settled {
                 return Step::Converged;
             }
         }
