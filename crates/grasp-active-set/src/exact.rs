@@ -261,8 +261,8 @@ impl ExactSolver {
 
     /// Newton from its current state (`hot`: a warm re-solve of the last answer's
     /// pieces); on a certified answer fills `out`.
-    fn try_newton(&mut self, alpha: f64, hot: bool, out: &mut Solution) -> bool {
-        let ok = self.newton.solve(&self.conic, &self.b, hot);
+    fn try_newton(&mut self, w: &[f64; 6], alpha: f64, hot: bool, out: &mut Solution) -> bool {
+        let ok = self.newton.solve(&self.conic, w, alpha, hot);
         out.iterations += self.newton.iterations;
         if ok {
             self.certificate = self.conic.certificate(
@@ -330,7 +330,7 @@ impl TorqueSolver for ExactSolver {
         // solution scales with 1/α).
         if let (false, Some(prev)) = (warm.is_cold(), self.hot) {
             self.newton.rescale(prev / alpha);
-            if self.try_newton(alpha, true, out) {
+            if self.try_newton(w, alpha, true, out) {
                 return;
             }
         }
@@ -339,7 +339,7 @@ impl TorqueSolver for ExactSolver {
             .solve_raw(w, &WarmStart::default(), &mut self.lin);
         out.iterations += self.lin.iterations;
         let feasible = self.lin.status == Status::Optimal;
-        if feasible && self.guess(alpha) && self.try_newton(alpha, false, out) {
+        if feasible && self.guess(alpha) && self.try_newton(w, alpha, false, out) {
             return;
         }
         if self.lin.status == Status::Infeasible {

@@ -77,11 +77,17 @@ pub(crate) struct Newton {
     /// The consistency equalities eliminated once per grasp: `x = x_p + N y` with
     /// `x_p = E⁺ b_E` (orthogonal to N), so the objective is `‖y‖²` plus a constant.
     null_basis: Matrix,
-    e_pinv: Matrix,
-    /// Rows of A times N (rows × k) and times E⁺ (rows × p); the equality rows unused.
+    /// Nᵀ (k × nx) and (E⁺)ᵀ (p × nx), for row-wise products.
+    null_basis_t: Matrix,
+    e_pinv_t: Matrix,
+    /// Rows of A times N (rows × k); the equality rows unused.
     a_red: Matrix,
-    a_epinv: Matrix,
-    /// `b − A x_p`, per solve.
+    /// `b − A x_p` and `x_p` are affine in the wrench, like b: their constant and
+    /// wrench parts side by side (rows × 7 and nx × 7), so that a solve costs
+    /// `(rows + nx) × 7`, not a pass through E⁺ (`b = (b0 + bw w)/α`).
+    b_red_map: Matrix,
+    xp_map: Matrix,
+    /// `b − A x_p` and `x_p`, per solve.
     b_red: Vec<f64>,
     xp: Vec<f64>,
     y: Vec<f64>,
@@ -136,19 +142,35 @@ impl Newton {
                 dot4(form.a.row(i), &column(&null_basis, j))
             }
         });
-        let a_epinv = Matrix::from_fn(rows, eq, |i, j| {
-            if i < eq || e_pinv.ncols() != eq {
+        // [b0 | bw] restricted to the equalities, then through E⁺ and A E⁺.
+        let be = Matrix::from_fn(eq, 7, |i, c| {
+            if c == 0 {
+                form.b0[i]
+            } else {
+                form.bw[(i, c - 1)]
+            }
+        });
+        let xp_map = Matrix::from_fn(form.nx, 7, |j, c| dot4(e_pinv.row(j), &column(&be, c)));
+        let b_red_map = Matrix::from_fn(rows, 7, |i, c| {
+            let b = if c == 0 {
+                form.b0[i]
+            } else {
+                form.bw[(i, c - 1)]
+            };
+            if i < eq {
                 0.0
             } else {
-                dot4(form.a.row(i), &column(&e_pinv, j))
+                b - dot4(form.a.row(i), &column(&xp_map, c))
             }
         });
         let n = k;
         let ncmax = (orth.1 - orth.0) + socs.len();
         Self {
-            a_epinv,
+            b_red_map,
+            xp_map,
+            null_basis_t: null_basis.transpose(),
+            e_pinv_t: e_pinv.transpose(),
             null_basis,
-            e_pinv,
             a_red,
             b_red: vec![0.0; rows],
             xp: vec![0.0; form.nx],
@@ -184,6 +206,7 @@ impl Newton {
         for v in self
             .x
             .iter_mut()
+            .chain(&mut self.y)
             .chain(&mut self.nu_row)
             .chain(&mut self.nu_cone)
         {
@@ -204,27 +227,34 @@ impl Newton {
     /// With `hot`, the first guess is solved by chord iterations on the factors of the
     /// last converged Newton step (a warm re-solve with the same pieces), falling back
     /// to Newton's method.
-    pub(crate) fn solve(&mut self, form: &ConicForm, b: &[f64], hot: bool) -> bool {
+    pub(crate) fn solve(&mut self, form: &ConicForm, w: &[f64; 6], alpha: f64, hot: bool) -> bool {
         self.iterations = 0;
         if self.null_basis.nrows() != form.nx || form.free > 0 {
             // The equalities could not be eliminated (or free internal forces, which
             // carry no curvature): the interior-point method's case.
             return false;
         }
-        // x_p = E⁺ b_E, b_red = b − (A E⁺) b_E, y = Nᵀ x.
-        let nx = form.nx;
-        let be = &b[..self.eq];
-        for j in 0..nx {
-            self.xp[j] = dot4(self.e_pinv.row(j), be);
+        // x_p = E⁺ b_E and b_red = b − (A E⁺) b_E from the wrench, at magnitude α.
+        let r = 1.0 / alpha;
+        let wt = [
+            r,
+            r * w[0],
+            r * w[1],
+            r * w[2],
+            r * w[3],
+            r * w[4],
+            r * w[5],
+        ];
+        for (j, xp) in self.xp.iter_mut().enumerate() {
+            *xp = dot4(self.xp_map.row(j), &wt);
         }
-        for i in self.eq..b.len() {
-            self.b_red[i] = b[i] - dot4(self.a_epinv.row(i), be);
+        for i in self.eq..self.b_red.len() {
+            self.b_red[i] = dot4(self.b_red_map.row(i), &wt);
         }
-        self.y.iter_mut().for_each(|v| *v = 0.0);
-        for i in 0..nx {
-            let xi = self.x[i];
-            for (y, nb) in self.y.iter_mut().zip(self.null_basis.row(i)) {
-                *y += xi * nb;
+        // y = Nᵀ x, unless hot: then y is the last answer's, rescaled with x.
+        if !hot {
+            for (j, y) in self.y.iter_mut().enumerate() {
+                *y = dot4(self.null_basis_t.row(j), &self.x);
             }
         }
         for change in 0..MAX_CHANGES {
@@ -325,18 +355,15 @@ impl Newton {
         for i in self.eq..form.rows() {
             let zi = self.z[i];
             if zi != 0.0 {
-                for (gj, a) in g.iter_mut().zip(form.a.row(i)) {
+                let (lo, hi) = form.row_span[i];
+                for (gj, a) in g[lo..hi].iter_mut().zip(&form.a.row(i)[lo..hi]) {
                     *gj += zi * a;
                 }
             }
         }
         let eq = self.eq;
-        self.z[..eq].iter_mut().for_each(|v| *v = 0.0);
-        for j in 0..nx {
-            let gj = g[j];
-            for (z, e) in self.z[..eq].iter_mut().zip(self.e_pinv.row(j)) {
-                *z -= gj * e;
-            }
+        for (r, z) in self.z[..eq].iter_mut().enumerate() {
+            *z = -dot4(self.e_pinv_t.row(r), g);
         }
     }
 

@@ -27,7 +27,7 @@
 //! answer is the same in any units and at any load.
 
 use crate::contact::ContactModel;
-use crate::matrix::{dot, norm2, Matrix};
+use crate::matrix::{norm2, Matrix};
 use crate::qp::{ConeRepr, RowId, TorqueQp};
 
 /// One block of rows of a [`ConicForm`], in row order.
@@ -80,6 +80,9 @@ pub struct ConicForm {
     /// The contact of each second-order cone, in cone order. An SFCl contact has two:
     /// first `fz − mz/mu_torsion` (binding when `mz > 0`), then `fz + mz/mu_torsion`.
     pub soc_contacts: Vec<usize>,
+    /// Per row of `A`, the columns from its first to past its last nonzero: a torque
+    /// limit or a minimum normal force touches few, and passes over A skip the rest.
+    pub row_span: Vec<(usize, usize)>,
 }
 
 /// One affine row `a·x + s = b0 + bw·w`, before assembly.
@@ -257,11 +260,20 @@ impl ConicForm {
             rows.extend(soc);
         }
         let n = rows.len();
+        let row_span = rows
+            .iter()
+            .map(|r| {
+                let first = r.a.iter().position(|&v| v != 0.0).unwrap_or(0);
+                let last = r.a.iter().rposition(|&v| v != 0.0).map_or(0, |j| j + 1);
+                (first, last.max(first))
+            })
+            .collect();
         Self {
             nx,
             joints: m,
             free: d,
             a: Matrix::from_fn(n, nx, |i, j| rows[i].a[j]),
+            row_span,
             b0: rows.iter().map(|r| r.b0).collect(),
             bw: Matrix::from_fn(n, 6, |i, j| rows[i].bw[j]),
             cones,
@@ -282,7 +294,11 @@ impl ConicForm {
     /// divided (unless it is 0: every row homogeneous, τ = 0 optimal).
     pub fn b_into(&self, w: &[f64; 6], out: &mut [f64]) -> f64 {
         for (i, b) in out.iter_mut().enumerate() {
-            *b = self.b0[i] + dot(self.bw.row(i), w);
+            let r = self.bw.row(i);
+            // Written out: six terms, no loop.
+            *b = self.b0[i]
+                + (r[0] * w[0] + r[1] * w[1] + r[2] * w[2])
+                + (r[3] * w[3] + r[4] * w[4] + r[5] * w[5]);
         }
         let alpha = out.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         if alpha > 0.0 {
@@ -317,87 +333,126 @@ impl ConicForm {
         tol: f64,
         scratch: &mut Vec<f64>,
     ) -> Certificate {
-        let rows = self.rows();
-        let m = self.joints;
-        scratch.clear();
-        scratch.resize(2 * rows + 2 * self.nx, 0.0);
-        let (s, rest) = scratch.split_at_mut(rows);
-        let (size, rest) = rest.split_at_mut(rows);
-        let (grad, gsize) = rest.split_at_mut(self.nx);
-        // s = b − A x, with the size of each row's terms, in one pass.
-        let mut primal = 0.0f64;
-        let mut start = 0;
-        for i in 0..rows {
-            let (mut ax, mut abs) = (0.0, 0.0);
-            for (a, v) in self.a.row(i).iter().zip(x) {
-                let t = a * v;
-                ax += t;
-                abs += t.abs();
-            }
-            s[i] = b[i] - ax;
-            size[i] = b[i].abs() + abs;
+        let (rows, m, nx) = (self.rows(), self.joints, self.nx);
+        // Every entry used is written below: no clearing.
+        if scratch.len() < rows + 2 * nx {
+            scratch.resize(rows + 2 * nx, 0.0);
         }
-        let scale = size.iter().copied().fold(f64::MIN_POSITIVE, f64::max);
-        let zscale = z.iter().fold(f64::MIN_POSITIVE, |a, v| a.max(v.abs()));
-        let mut dual = 0.0f64;
+        let (s, rest) = scratch.split_at_mut(rows);
+        let (grad, gsize) = rest[..2 * nx].split_at_mut(nx);
+        // s = b − A x, with the size of its terms, in one pass.
+        let mut scale = f64::MIN_POSITIVE;
+        for (i, si) in s.iter_mut().enumerate() {
+            let (lo, hi) = self.row_span[i];
+            let (ax, abs) = dot_abs4(&self.a.row(i)[lo..hi], &x[lo..hi]);
+            *si = b[i] - ax;
+            scale = fmax(scale, b[i].abs() + abs);
+        }
+        // zscale, bᵀz and Σ |b_i z_i| in one pass.
+        let (mut zscale, mut bz, mut bz_size) = (f64::MIN_POSITIVE, 0.0, 0.0);
+        for (bi, zi) in b.iter().zip(z) {
+            zscale = fmax(zscale, zi.abs());
+            bz += bi * zi;
+            bz_size += (bi * zi).abs();
+        }
+        let (mut primal, mut dual) = (0.0f64, 0.0f64);
+        let mut start = 0;
         for cone in &self.cones {
             let r = start..start + cone.dim();
             match *cone {
                 ConeKind::Zero(_) => {
                     for i in r {
-                        primal = primal.max(s[i].abs() / scale);
+                        primal = fmax(primal, s[i].abs());
                     }
                 }
                 ConeKind::Nonnegative(_) => {
                     for i in r {
-                        primal = primal.max(-s[i] / scale);
-                        dual = dual.max(-z[i] / zscale);
+                        primal = fmax(primal, -s[i]);
+                        dual = fmax(dual, -z[i]);
                     }
                 }
                 ConeKind::SecondOrder(_) => {
                     let (h, t) = (r.start, r.start + 1..r.end);
-                    primal = primal.max((norm2(&s[t.clone()]) - s[h]) / scale);
-                    dual = dual.max((norm2(&z[t]) - z[h]) / zscale);
+                    primal = fmax(primal, norm2(&s[t.clone()]) - s[h]);
+                    dual = fmax(dual, norm2(&z[t]) - z[h]);
                 }
             }
             start += cone.dim();
         }
         // P x + Aᵀ z, against Σ |terms| per column.
-        let mut stationarity = 0.0f64;
-        let mut colsize = 0.0f64;
-        for j in 0..m {
-            grad[j] = 2.0 * x[j];
-            gsize[j] = (2.0 * x[j]).abs();
+        for j in 0..nx {
+            let g = if j < m { 2.0 * x[j] } else { 0.0 };
+            grad[j] = g;
+            gsize[j] = g.abs();
         }
         // Only the rows with a multiplier contribute (most are inactive, z = 0).
         for i in (0..rows).filter(|&i| z[i] != 0.0) {
-            for ((g, gs), a) in grad.iter_mut().zip(gsize.iter_mut()).zip(self.a.row(i)) {
+            let (lo, hi) = self.row_span[i];
+            let (grad, gsize) = (&mut grad[lo..hi], &mut gsize[lo..hi]);
+            for ((g, gs), a) in grad
+                .iter_mut()
+                .zip(gsize.iter_mut())
+                .zip(&self.a.row(i)[lo..hi])
+            {
                 let t = a * z[i];
                 *g += t;
                 *gs += t.abs();
             }
         }
-        for j in 0..self.nx {
-            colsize = colsize.max(gsize[j]);
-        }
-        for g in grad.iter() {
-            stationarity = stationarity.max(g.abs() / colsize.max(f64::MIN_POSITIVE));
-        }
+        let colsize = gsize.iter().fold(f64::MIN_POSITIVE, |a, v| fmax(a, *v));
+        let stationarity = grad.iter().fold(0.0f64, |a, g| fmax(a, g.abs())) / colsize;
+        // The maxima above skip NaN: a non-finite input fails here instead.
+        let finite = b.iter().chain(x).chain(z).all(|v| v.is_finite());
+        let (primal, dual) = (primal / scale, dual / zscale);
         // Gap xᵀPx + bᵀz against the sizes of its terms.
         let xpx: f64 = 2.0 * x[..m].iter().map(|v| v * v).sum::<f64>();
-        let bz: f64 = dot(b, z);
-        let gsize = xpx + b.iter().zip(z).map(|(b, z)| (b * z).abs()).sum::<f64>();
         // The scaled problem's right-hand side has size 1, so its objective's natural
         // size is 1: the floor for a grasp whose optimum is τ = 0.
-        let gap = (xpx + bz).abs() / gsize.max(1.0);
+        let gap = (xpx + bz).abs() / (xpx + bz_size).max(1.0);
         Certificate {
             primal,
             dual,
             stationarity,
             gap,
-            passed: primal <= tol && dual <= tol && stationarity <= tol && gap <= tol,
+            passed: finite && primal <= tol && dual <= tol && stationarity <= tol && gap <= tol,
         }
     }
+}
+
+/// The larger of two numbers, one comparison (NaN is the caller's to rule out).
+#[inline]
+fn fmax(a: f64, b: f64) -> f64 {
+    if b > a {
+        b
+    } else {
+        a
+    }
+}
+
+/// `(Σ a_i x_i, Σ |a_i x_i|)` in four lanes (see [`crate::matrix::dot4`]).
+fn dot_abs4(a: &[f64], x: &[f64]) -> (f64, f64) {
+    let n = a.len().min(x.len());
+    let (a, x) = (&a[..n], &x[..n]);
+    let (mut s, mut t) = ([0.0f64; 4], [0.0f64; 4]);
+    let mut ca = a.chunks_exact(4);
+    let mut cx = x.chunks_exact(4);
+    for (p, q) in (&mut ca).zip(&mut cx) {
+        for l in 0..4 {
+            let v = p[l] * q[l];
+            s[l] += v;
+            t[l] += v.abs();
+        }
+    }
+    let (mut ts, mut ta) = (0.0, 0.0);
+    for (p, q) in ca.remainder().iter().zip(cx.remainder()) {
+        let v = p * q;
+        ts += v;
+        ta += v.abs();
+    }
+    (
+        (s[0] + s[1]) + (s[2] + s[3]) + ts,
+        (t[0] + t[1]) + (t[2] + t[3]) + ta,
+    )
 }
 
 /// The outcome of [`ConicForm::certificate`]: each measure relative to its terms.
