@@ -20,9 +20,12 @@
 //! `ν_k ≥ 0`), so the caller's certificate checks the answer. A contact at the apex
 //! (where g is not differentiable), or a guess that does not converge, is left to the
 //! interior-point method.
+//!
+//! A warm re-solve with the same pieces keeps the last factorisation and runs chord
+//! iterations on it, through the KKT matrix's explicit inverse, built once per
+//! factorisation: a control loop pays O((k + nc)²) per iteration.
 
 use crate::dense::{backward, cholesky, dot4, forward};
-use crate::ipm::SOC_MAX;
 use grasp_core::linalg::{decompose, RankThreshold};
 use grasp_core::matrix::norm_inf;
 use grasp_core::{ConeKind, ConicForm, Matrix};
@@ -30,6 +33,9 @@ use grasp_core::{ConeKind, ConicForm, Matrix};
 /// Newton iterations per guess, and corrections of the guess.
 const MAX_NEWTON: usize = 12;
 const MAX_CHANGES: usize = 8;
+/// The error a chord re-solve stops at, relative to the iterate (the scaled problem's
+/// answer has size about 1): a hundredth of the certificate's tolerance.
+const CHORD_ERROR: f64 = 1e-11;
 
 /// Where a second-order cone is at the optimum.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,6 +88,10 @@ pub(crate) struct Newton {
     e_pinv_t: Matrix,
     /// Rows of A times N (rows × k); the equality rows unused.
     a_red: Matrix,
+    /// Per second-order cone, the Gram matrix `A1ᵀ A1` of its tail rows in the
+    /// reduced variables (k × k each): the curvature `A1ᵀ (I − uuᵀ) A1` is then
+    /// `G − (A1ᵀu)(A1ᵀu)ᵀ`, O(k²) per cone and iteration.
+    gram: Vec<f64>,
     /// `b − A x_p` and `x_p` are affine in the wrench, like b: their constant and
     /// wrench parts side by side (rows × 7 and nx × 7), so that a solve costs
     /// `(rows + nx) × 7`, not a pass through E⁺ (`b = (b0 + bw w)/α`).
@@ -98,6 +108,13 @@ pub(crate) struct Newton {
     /// The constraint count of the last converged Newton step, whose factors (`h`,
     /// `ycols`, `schur`) and constraint owners are kept for a chord re-solve.
     frozen: Option<usize>,
+    /// The frozen KKT matrix's inverse, (k + nc) × (k + nc) row-major from
+    /// `[t; c]` to `[dy; ν]`, built at the first chord re-solve on new factors: a
+    /// control loop then pays one dense product per iteration, not two triangular
+    /// solves and the Schur complement's.
+    kkt_inverse: Vec<f64>,
+    kkt_inverse_valid: bool,
+    rhs: Vec<f64>,
     s: Vec<f64>,
     h: Vec<f64>,
     c: Vec<f64>,
@@ -163,9 +180,22 @@ impl Newton {
                 b - dot4(form.a.row(i), &column(&xp_map, c))
             }
         });
+        let mut gram = vec![0.0; socs.len() * k * k];
+        for (c, &(start, dim)) in socs.iter().enumerate() {
+            let g = &mut gram[c * k * k..(c + 1) * k * k];
+            for p in start + 1..start + dim {
+                let a = a_red.row(p);
+                for i in 0..k {
+                    for j in 0..k {
+                        g[i * k + j] += a[i] * a[j];
+                    }
+                }
+            }
+        }
         let n = k;
         let ncmax = (orth.1 - orth.0) + socs.len();
         Self {
+            gram,
             b_red_map,
             xp_map,
             null_basis_t: null_basis.transpose(),
@@ -187,6 +217,9 @@ impl Newton {
             z: vec![0.0; rows],
             iterations: 0,
             frozen: None,
+            kkt_inverse: vec![0.0; (n + ncmax) * (n + ncmax)],
+            kkt_inverse_valid: false,
+            rhs: vec![0.0; n + ncmax],
             s: vec![0.0; rows],
             h: vec![0.0; n * n],
             c: vec![0.0; ncmax * n],
@@ -461,6 +494,40 @@ impl Newton {
         backward(&self.h, n, &mut self.dx);
     }
 
+    /// `[dx; nu] = K⁻¹ [t; cval]` with the frozen factors' explicit inverse, built
+    /// here from k + nc solves when the factors are new (`t` and `cval` are used up).
+    fn apply_kkt_inverse(&mut self, nc: usize) {
+        let (n, m) = (self.n, self.n + nc);
+        self.rhs[..n].copy_from_slice(&self.t[..n]);
+        self.rhs[n..m].copy_from_slice(&self.cval[..nc]);
+        if !self.kkt_inverse_valid {
+            for col in 0..m {
+                self.t[..n].iter_mut().for_each(|v| *v = 0.0);
+                self.cval[..nc].iter_mut().for_each(|v| *v = 0.0);
+                if col < n {
+                    self.t[col] = 1.0;
+                } else {
+                    self.cval[col - n] = 1.0;
+                }
+                self.solve_kkt(nc);
+                for i in 0..n {
+                    self.kkt_inverse[i * m + col] = self.dx[i];
+                }
+                for r in 0..nc {
+                    self.kkt_inverse[(n + r) * m + col] = self.nu[r];
+                }
+            }
+            self.kkt_inverse_valid = true;
+        }
+        let rhs = &self.rhs[..m];
+        for (i, d) in self.dx.iter_mut().enumerate() {
+            *d = dot4(&self.kkt_inverse[i * m..i * m + m], rhs);
+        }
+        for r in 0..nc {
+            self.nu[r] = dot4(&self.kkt_inverse[(n + r) * m..(n + r) * m + m], rhs);
+        }
+    }
+
     /// Chord iterations: the KKT residual at the current point, solved with the frozen
     /// factors of the last Newton step (`nc` constraints, same owners). Its fixed point
     /// is the KKT point of the current guess; it converges linearly, at the rate of the
@@ -505,7 +572,7 @@ impl Newton {
                     }
                 }
             }
-            self.solve_kkt(nc);
+            self.apply_kkt_inverse(nc);
             for r in 0..nc {
                 match self.owner[r] {
                     Owner::Row(i) => self.nu_row[i] += self.nu[r],
@@ -519,7 +586,7 @@ impl Newton {
                 return Step::Failed;
             }
             // Linear convergence at rate ρ leaves an error of about ρ/(1−ρ) × the step:
-            // stop when that is below 1e-13 (or the step itself is).
+            // stop when that is below CHORD_ERROR (or the step itself is).
             let (step, scale) = (norm_inf(&self.dx), norm_inf(&self.y).max(1.0));
             // (No rate before a second step: the first has nothing to compare with.)
             let rate = if previous.is_finite() {
@@ -529,8 +596,8 @@ impl Newton {
             };
             previous = step;
             let settled =
-                rate.is_finite() && rate < 0.5 && step * rate / (1.0 - rate) <= 1e-13 * scale;
-            if step <= 1e-13 * scale || settled {
+                rate.is_finite() && rate < 0.5 && step * rate / (1.0 - rate) <= CHORD_ERROR * scale;
+            if step <= CHORD_ERROR * scale || settled {
                 return Step::Converged;
             }
         }
@@ -540,14 +607,20 @@ impl Newton {
     /// Newton's method on the current guess.
     fn newton(&mut self) -> Step {
         let n = self.n;
-        let mut last_step = f64::INFINITY;
+        let (mut last_step, mut before_last) = (f64::INFINITY, f64::INFINITY);
+        // The factors below replace the frozen ones.
+        self.kkt_inverse_valid = false;
         for it in 0..MAX_NEWTON {
             self.iterations += 1;
             self.slacks();
-            // Converging this guess cannot remove a violation far beyond the step.
+            // Converging this guess cannot remove a violation far beyond the step, nor,
+            // once the steps shrink quadratically (what is left to move is far below
+            // the last step), one a few times the last step.
             if it >= 2 {
                 let v = self.worst_inactive();
-                if v > self.feasibility_tolerance() && v > 100.0 * last_step {
+                let settling = last_step <= 0.1 * before_last;
+                let bound = if settling { 2.0 } else { 100.0 } * last_step;
+                if v > self.feasibility_tolerance() && v > bound {
                     return Step::Violated;
                 }
             }
@@ -591,33 +664,25 @@ impl Newton {
                 if nu <= 0.0 {
                     continue;
                 }
-                // ν A1ᵀ (I − uuᵀ) A1 / r = Σ_p a_p b_pᵀ with b_p = (ν/r) Σ_q (δ_pq − u_p u_q) a_q
-                // (upper triangle, one rank-one update per row of A1).
-                let d1 = dim - 1;
-                let mut u = [0.0; SOC_MAX];
-                for q in 0..d1 {
-                    u[q] = s1[q] / r;
-                }
-                for p in 0..d1 {
-                    let bp = &mut self.t[..n];
-                    bp.copy_from_slice(self.a_red.row(start + 1 + p));
-                    let c = nu / r;
-                    bp.iter_mut().for_each(|v| *v *= c);
-                    for q in 0..d1 {
-                        let m = -c * u[p] * u[q];
-                        for (v, a) in bp.iter_mut().zip(self.a_red.row(start + 1 + q)) {
-                            *v += m * a;
-                        }
+                // (ν/r) A1ᵀ (I − uuᵀ) A1 = (ν/r) (G − v vᵀ), v = A1ᵀ u (upper triangle).
+                let c = nu / r;
+                let v = &mut self.t[..n];
+                v.iter_mut().for_each(|x| *x = 0.0);
+                for j in 1..dim {
+                    let u = s1[j - 1] / r;
+                    for (x, a) in v.iter_mut().zip(self.a_red.row(start + j)) {
+                        *x += u * a;
                     }
-                    let ap = self.a_red.row(start + 1 + p);
-                    for i in 0..n {
-                        let ai = ap[i];
-                        if ai == 0.0 {
-                            continue;
-                        }
-                        for (h, bj) in self.h[i * n + i..i * n + n].iter_mut().zip(&bp[i..]) {
-                            *h += ai * bj;
-                        }
+                }
+                let g = &self.gram[k * n * n..(k + 1) * n * n];
+                for i in 0..n {
+                    let vi = v[i];
+                    for ((h, gij), vj) in self.h[i * n + i..i * n + n]
+                        .iter_mut()
+                        .zip(&g[i * n + i..i * n + n])
+                        .zip(&v[i..])
+                    {
+                        *h += c * (gij - vi * vj);
                     }
                 }
             }
@@ -686,6 +751,7 @@ impl Newton {
             }
             let step = norm_inf(&self.dx);
             let previous = last_step;
+            before_last = last_step;
             last_step = step;
             if !self.y.iter().all(|v| v.is_finite()) {
                 return Step::Failed;
