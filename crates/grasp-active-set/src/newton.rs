@@ -26,6 +26,7 @@
 //! factorisation: a control loop pays O((k + nc)²) per iteration.
 
 use crate::dense::{backward, cholesky, dot4, forward};
+use grasp_core::conic::soc_excess;
 use grasp_core::linalg::{decompose, RankThreshold};
 use grasp_core::matrix::norm_inf;
 use grasp_core::{ConeKind, ConicForm, Matrix};
@@ -315,7 +316,7 @@ impl Newton {
             }
             for (k, &(start, dim)) in self.socs.iter().enumerate() {
                 if self.piece[k] == Piece::Inside {
-                    let v = soc_norm(&self.s[start + 1..start + dim]) - self.s[start];
+                    let v = soc_excess(self.s[start], &self.s[start + 1..start + dim]);
                     if v > feas && worst.is_none_or(|(w, _)| v > w) {
                         worst = Some((v, Owner::Cone(k)));
                     }
@@ -330,8 +331,7 @@ impl Newton {
                 continue;
             }
             // The most negative multiplier leaves.
-            let numax = self
-                .nu_row
+            let numax = self.nu_row[self.orth.0..self.orth.1]
                 .iter()
                 .chain(&self.nu_cone)
                 .fold(f64::MIN_POSITIVE, |a, v| a.max(v.abs()));
@@ -438,7 +438,7 @@ impl Newton {
         }
         for (k, &(start, dim)) in self.socs.iter().enumerate() {
             if self.piece[k] == Piece::Inside {
-                worst = worst.max(soc_norm(&self.s[start + 1..start + dim]) - self.s[start]);
+                worst = worst.max(soc_excess(self.s[start], &self.s[start + 1..start + dim]));
             }
         }
         worst

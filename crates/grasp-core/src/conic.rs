@@ -373,8 +373,8 @@ impl ConicForm {
                 }
                 ConeKind::SecondOrder(_) => {
                     let (h, t) = (r.start, r.start + 1..r.end);
-                    primal = fmax(primal, norm2(&s[t.clone()]) - s[h]);
-                    dual = fmax(dual, norm2(&z[t]) - z[h]);
+                    primal = fmax(primal, soc_excess(s[h], &s[t.clone()]));
+                    dual = fmax(dual, soc_excess(z[h], &z[t]));
                 }
             }
             start += cone.dim();
@@ -416,6 +416,18 @@ impl ConicForm {
             gap,
             passed: finite && primal <= tol && dual <= tol && stationarity <= tol && gap <= tol,
         }
+    }
+}
+
+/// `‖tail‖ − head` where positive, else 0: how far `(head, tail)` is outside its
+/// second-order cone (no square root for a point inside).
+#[inline]
+pub fn soc_excess(head: f64, tail: &[f64]) -> f64 {
+    let q: f64 = tail.iter().map(|v| v * v).sum();
+    if head >= 0.0 && q <= head * head {
+        0.0
+    } else {
+        q.sqrt() - head
     }
 }
 
