@@ -84,9 +84,8 @@ pub(crate) struct Newton {
     /// The consistency equalities eliminated once per grasp: `x = x_p + N y` with
     /// `x_p = E⁺ b_E` (orthogonal to N), so the objective is `‖y‖²` plus a constant.
     null_basis: Matrix,
-    /// Nᵀ (k × nx) and (E⁺)ᵀ (p × nx), for row-wise products.
+    /// Nᵀ (k × nx), for row-wise products.
     null_basis_t: Matrix,
-    e_pinv_t: Matrix,
     /// Rows of A times N (rows × k); the equality rows unused.
     a_red: Matrix,
     /// Per second-order cone, the Gram matrix `A1ᵀ A1` of its tail rows in the
@@ -200,7 +199,6 @@ impl Newton {
             b_red_map,
             xp_map,
             null_basis_t: null_basis.transpose(),
-            e_pinv_t: e_pinv.transpose(),
             null_basis,
             a_red,
             b_red: vec![0.0; rows],
@@ -369,35 +367,13 @@ impl Newton {
         false
     }
 
-    /// `x = x_p + N y`, and the conic dual, the equalities' part from stationarity:
-    /// `z_E = −(E⁺)ᵀ (P x + A_inᵀ z_in)`.
+    /// `x = x_p + N y`, and the conic dual on the inequality rows (the certificate
+    /// needs none on the equalities).
     fn finish(&mut self, form: &ConicForm) {
-        let nx = form.nx;
-        for i in 0..nx {
+        for i in 0..form.nx {
             self.x[i] = self.xp[i] + dot4(self.null_basis.row(i), &self.y);
         }
         self.dual();
-        let g = &mut self.t[..nx];
-        for j in 0..nx {
-            g[j] = if j < form.joints {
-                2.0 * self.x[j]
-            } else {
-                0.0
-            };
-        }
-        for i in self.eq..form.rows() {
-            let zi = self.z[i];
-            if zi != 0.0 {
-                let (lo, hi) = form.row_span[i];
-                for (gj, a) in g[lo..hi].iter_mut().zip(&form.a.row(i)[lo..hi]) {
-                    *gj += zi * a;
-                }
-            }
-        }
-        let eq = self.eq;
-        for (r, z) in self.z[..eq].iter_mut().enumerate() {
-            *z = -dot4(self.e_pinv_t.row(r), g);
-        }
     }
 
     /// `Σ |c_j|` of the first `nc` Newton constraints at the trial point in `t`.

@@ -27,7 +27,8 @@
 //! answer is the same in any units and at any load.
 
 use crate::contact::ContactModel;
-use crate::matrix::{norm2, Matrix};
+use crate::linalg::{decompose, RankThreshold};
+use crate::matrix::{dot4, norm2, Matrix};
 use crate::qp::{ConeRepr, RowId, TorqueQp};
 
 /// One block of rows of a [`ConicForm`], in row order.
@@ -80,6 +81,11 @@ pub struct ConicForm {
     /// The contact of each second-order cone, in cone order. An SFCl contact has two:
     /// first `fz − mz/mu_torsion` (binding when `mz > 0`), then `fz + mz/mu_torsion`.
     pub soc_contacts: Vec<usize>,
+    /// An orthonormal basis of the null space of the equality rows, transposed
+    /// ((nx − p) × nx); `None` without equalities. The certificate's stationarity is
+    /// `P x + A_inᵀ z_in` projected on it: a z on the equalities that cancels the rest
+    /// exists exactly when the projection vanishes, so none is needed.
+    pub eq_null_t: Option<Matrix>,
     /// Per row of `A`, the columns from its first to past its last nonzero: a torque
     /// limit or a minimum normal force touches few, and passes over A skip the rest.
     pub row_span: Vec<(usize, usize)>,
@@ -268,11 +274,25 @@ impl ConicForm {
                 (first, last.max(first))
             })
             .collect();
+        let a = Matrix::from_fn(n, nx, |i, j| rows[i].a[j]);
+        let eq = match cones.first() {
+            Some(&ConeKind::Zero(p)) => p,
+            _ => 0,
+        };
+        // (Independent rows from the core; a failed decomposition leaves the basis
+        // out, and the certificate then fails rather than guess.)
+        let eq_null_t = (eq > 0).then(|| {
+            let e = Matrix::from_fn(eq, nx, |i, j| a[(i, j)]);
+            decompose(&e, RankThreshold::Relative(1e-13))
+                .map(|d| d.null_basis.transpose())
+                .unwrap_or_else(|_| Matrix::zeros(0, 0))
+        });
         Self {
             nx,
             joints: m,
             free: d,
-            a: Matrix::from_fn(n, nx, |i, j| rows[i].a[j]),
+            a,
+            eq_null_t,
             row_span,
             b0: rows.iter().map(|r| r.b0).collect(),
             bw: Matrix::from_fn(n, 6, |i, j| rows[i].bw[j]),
@@ -318,10 +338,12 @@ impl ConicForm {
 
     /// Checks from scratch that `(x, z)` is an optimal primal-dual pair of the scaled
     /// problem with right-hand side `b`, to relative tolerance `tol`:
-    /// - primal feasibility: `s = b − A x` in K;
-    /// - dual feasibility: z in the dual cone K* (free on the zero cone);
-    /// - stationarity: `P x + Aᵀ z = 0`;
-    /// - complementarity and the duality gap: `xᵀPx + bᵀz = sᵀz ≈ 0`.
+    /// - primal feasibility: `s = b − A x` in K (the equalities `s_E = 0` included);
+    /// - dual feasibility: z in the dual cone K* on the inequality rows;
+    /// - stationarity: `P x + Aᵀ z = 0` for some multipliers of the equalities, that
+    ///   is, `P x + A_inᵀ z_in` orthogonal to the null space of the equality rows
+    ///   (`z`'s entries on the equalities are not read);
+    /// - complementarity, the duality gap: `s_inᵀ z_in ≈ 0`.
     ///
     /// Every measure is relative to the size of the terms it sums, so the check is the
     /// same at any scale. `scratch` is grown once and reused (no allocation after).
@@ -348,11 +370,15 @@ impl ConicForm {
             *si = b[i] - ax;
             scale = fmax(scale, b[i].abs() + abs);
         }
-        // zscale, bᵀz and Σ |b_i z_i| in one pass.
-        let (mut zscale, mut bz, mut bz_size) = (f64::MIN_POSITIVE, 0.0, 0.0);
-        for (bi, zi) in b.iter().zip(z) {
+        let eq = match self.cones.first() {
+            Some(&ConeKind::Zero(p)) => p,
+            _ => 0,
+        };
+        // zscale, sᵀz and Σ |b_i z_i| over the inequality rows in one pass.
+        let (mut zscale, mut sz, mut bz_size) = (f64::MIN_POSITIVE, 0.0, 0.0);
+        for ((bi, si), zi) in b.iter().zip(s.iter()).zip(z).skip(eq) {
             zscale = fmax(zscale, zi.abs());
-            bz += bi * zi;
+            sz += si * zi;
             bz_size += (bi * zi).abs();
         }
         let (mut primal, mut dual) = (0.0f64, 0.0f64);
@@ -379,14 +405,14 @@ impl ConicForm {
             }
             start += cone.dim();
         }
-        // P x + Aᵀ z, against Σ |terms| per column.
+        // g = P x + A_inᵀ z_in, against Σ |terms| per column.
         for j in 0..nx {
             let g = if j < m { 2.0 * x[j] } else { 0.0 };
             grad[j] = g;
             gsize[j] = g.abs();
         }
         // Only the rows with a multiplier contribute (most are inactive, z = 0).
-        for i in (0..rows).filter(|&i| z[i] != 0.0) {
+        for i in (eq..rows).filter(|&i| z[i] != 0.0) {
             let (lo, hi) = self.row_span[i];
             let (grad, gsize) = (&mut grad[lo..hi], &mut gsize[lo..hi]);
             for ((g, gs), a) in grad
@@ -400,15 +426,23 @@ impl ConicForm {
             }
         }
         let colsize = gsize.iter().fold(f64::MIN_POSITIVE, |a, v| fmax(a, *v));
-        let stationarity = grad.iter().fold(0.0f64, |a, g| fmax(a, g.abs())) / colsize;
+        // Its component in the null space of the equalities (all of it without any).
+        let (residual, basis_ok) = match &self.eq_null_t {
+            None => (grad.iter().fold(0.0f64, |a, g| fmax(a, g.abs())), true),
+            Some(nt) => (
+                (0..nt.nrows()).fold(0.0f64, |a, r| fmax(a, dot4(nt.row(r), grad).abs())),
+                nt.ncols() == nx,
+            ),
+        };
+        let stationarity = residual / colsize;
         // The maxima above skip NaN: a non-finite input fails here instead.
-        let finite = b.iter().chain(x).chain(z).all(|v| v.is_finite());
+        let finite = basis_ok && b.iter().chain(x).chain(&z[eq..]).all(|v| v.is_finite());
         let (primal, dual) = (primal / scale, dual / zscale);
-        // Gap xᵀPx + bᵀz against the sizes of its terms.
+        // Complementarity against the sizes of the gap's terms (xᵀPx + bᵀz at a
+        // stationary point). The scaled problem's right-hand side has size 1, so its
+        // objective's natural size is 1: the floor for a grasp whose optimum is τ = 0.
         let xpx: f64 = 2.0 * x[..m].iter().map(|v| v * v).sum::<f64>();
-        // The scaled problem's right-hand side has size 1, so its objective's natural
-        // size is 1: the floor for a grasp whose optimum is τ = 0.
-        let gap = (xpx + bz).abs() / (xpx + bz_size).max(1.0);
+        let gap = sz.abs() / (xpx + bz_size).max(1.0);
         Certificate {
             primal,
             dual,
