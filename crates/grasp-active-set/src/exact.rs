@@ -394,3 +394,93 @@ impl TorqueSolver for ExactSolver {
         });
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use grasp_core::{GraspModel, ModelOptions};
+    use std::sync::Arc;
+
+    /// The Newton answers of the reference grasps pass the certificate, and the same
+    /// answers spoiled each way fail it.
+    #[test]
+    fn the_certificate_accepts_the_optimum_and_nothing_near_it() {
+        let mut checked = 0;
+        for case in grasp_testkit::reference_cases() {
+            let p = grasp_testkit::reference_problem(&case["problem"]);
+            let model = Arc::new(GraspModel::new(&p, &ModelOptions::default()).unwrap());
+            let mut s = ExactSolver::new(TorqueQp::exact(model), Default::default()).unwrap();
+            let mut out = Solution::default();
+            s.solve_raw(&p.wrench, &WarmStart::default(), &mut out);
+            if out.method != Some("newton") {
+                continue;
+            }
+            let (x, z) = (s.newton.x.clone(), s.newton.z.clone());
+            let mut scratch = Vec::new();
+            let check = |x: &[f64], z: &[f64], scratch: &mut Vec<f64>| {
+                s.conic
+                    .certificate(&s.b, x, z, CERTIFICATE_TOLERANCE, scratch)
+            };
+            assert!(check(&x, &z, &mut scratch).passed);
+            // Stationarity needs no multipliers of the equalities: with the
+            // least-squares ones the full residual P x + Aᵀ z vanishes too.
+            let (rows, nx) = (s.conic.rows(), s.conic.nx);
+            let eq = match s.conic.cones.first() {
+                Some(&grasp_core::ConeKind::Zero(d)) => d,
+                _ => 0,
+            };
+            let mut g: Vec<f64> = (0..nx)
+                .map(|j| if j < s.conic.joints { 2.0 * x[j] } else { 0.0 })
+                .collect();
+            for i in eq..rows {
+                for j in 0..nx {
+                    g[j] += s.conic.a[(i, j)] * z[i];
+                }
+            }
+            if eq > 0 {
+                let e = grasp_core::Matrix::from_fn(eq, nx, |i, j| s.conic.a[(i, j)]);
+                let d = grasp_core::linalg::decompose(
+                    &e,
+                    grasp_core::linalg::RankThreshold::Relative(1e-13),
+                )
+                .unwrap();
+                let pinv = d.pseudo_inverse(); // nx × eq
+                let ze: Vec<f64> = (0..eq)
+                    .map(|r| -(0..nx).map(|j| pinv[(j, r)] * g[j]).sum::<f64>())
+                    .collect();
+                for j in 0..nx {
+                    let full = g[j] + (0..eq).map(|r| e[(r, j)] * ze[r]).sum::<f64>();
+                    assert!(full.abs() < 1e-8 * (1.0 + grasp_core::matrix::norm_inf(&g)));
+                }
+            }
+            // Spoiled: x moved off the optimum along a torque, z scaled, z's sign flipped
+            // on a loaded cone, a NaN.
+            let mut bad = x.clone();
+            bad[0] += 1e-6 * (1.0 + grasp_core::matrix::norm_inf(&x));
+            assert!(!check(&bad, &z, &mut scratch).passed, "moved x passed");
+            // Along the equalities' null space (the equalities still hold).
+            if let Some(nt) = s.conic.eq_null_t.as_ref().filter(|nt| nt.nrows() > 0) {
+                let moved: Vec<f64> = (0..nx).map(|j| x[j] + 1e-6 * nt[(0, j)]).collect();
+                let c = check(&moved, &z, &mut scratch);
+                assert!(
+                    !c.passed && c.stationarity > 1e-9,
+                    "a feasible move passed: {c:?}"
+                );
+            }
+            let scaled: Vec<f64> = z.iter().map(|v| 1.01 * v).collect();
+            if z[eq..].iter().any(|v| *v != 0.0) {
+                assert!(!check(&x, &scaled, &mut scratch).passed, "scaled z passed");
+                let flipped: Vec<f64> = z.iter().map(|v| -v).collect();
+                assert!(
+                    !check(&x, &flipped, &mut scratch).passed,
+                    "negated z passed"
+                );
+            }
+            let mut nan = x.clone();
+            nan[nx - 1] = f64::NAN;
+            assert!(!check(&nan, &z, &mut scratch).passed, "NaN passed");
+            checked += 1;
+        }
+        assert!(checked >= 30, "only {checked} reference grasps checked");
+    }
+}
