@@ -278,10 +278,10 @@ impl Newton {
             r * w[5],
         ];
         for (j, xp) in self.xp.iter_mut().enumerate() {
-            *xp = dot4(self.xp_map.row(j), &wt);
+            *xp = dot7(self.xp_map.row(j), &wt);
         }
         for i in self.eq..self.b_red.len() {
-            self.b_red[i] = dot4(self.b_red_map.row(i), &wt);
+            self.b_red[i] = dot7(self.b_red_map.row(i), &wt);
         }
         // y = Nᵀ x, unless hot: then y is the last answer's, rescaled with x.
         if !hot {
@@ -762,6 +762,16 @@ impl Newton {
 
 fn column(m: &Matrix, j: usize) -> Vec<f64> {
     (0..m.nrows()).map(|i| m[(i, j)]).collect()
+}
+
+/// `Σ a_i b_i` over seven terms, written out (a constant and a wrench).
+#[inline]
+fn dot7(a: &[f64], b: &[f64; 7]) -> f64 {
+    let a: &[f64; 7] = a.try_into().expect("rows of seven");
+    (a[0] * b[0] + a[1] * b[1])
+        + (a[2] * b[2] + a[3] * b[3])
+        + (a[4] * b[4] + a[5] * b[5])
+        + a[6] * b[6]
 }
 
 fn soc_norm(v: &[f64]) -> f64 {

@@ -322,7 +322,8 @@ impl ConicForm {
         }
         let alpha = out.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         if alpha > 0.0 {
-            out.iter_mut().for_each(|v| *v /= alpha);
+            let inv = 1.0 / alpha;
+            out.iter_mut().for_each(|v| *v *= inv);
         }
         alpha
     }
