@@ -86,9 +86,11 @@ pub struct ConicForm {
     /// `P x + A_inᵀ z_in` projected on it: a z on the equalities that cancels the rest
     /// exists exactly when the projection vanishes, so none is needed.
     pub eq_null_t: Option<Matrix>,
-    /// Per row of `A`, the columns from its first to past its last nonzero: a torque
-    /// limit or a minimum normal force touches few, and passes over A skip the rest.
-    pub row_span: Vec<(usize, usize)>,
+    /// `A` with its rows zero-padded to a multiple of four columns, and per row the
+    /// span of four-column blocks holding its nonzeros: a torque limit or a minimum
+    /// normal force touches few, and the certificate's passes over A run whole blocks.
+    a_padded: Matrix,
+    row_span: Vec<(usize, usize)>,
 }
 
 /// One affine row `a·x + s = b0 + bw·w`, before assembly.
@@ -271,9 +273,11 @@ impl ConicForm {
             .map(|r| {
                 let first = r.a.iter().position(|&v| v != 0.0).unwrap_or(0);
                 let last = r.a.iter().rposition(|&v| v != 0.0).map_or(0, |j| j + 1);
-                (first, last.max(first))
+                // Whole blocks of four within the padded width.
+                (first / 4 * 4, last.max(first).div_ceil(4) * 4)
             })
             .collect();
+        let padded = nx.div_ceil(4) * 4;
         let a = Matrix::from_fn(n, nx, |i, j| rows[i].a[j]);
         let eq = match cones.first() {
             Some(&ConeKind::Zero(p)) => p,
@@ -291,6 +295,7 @@ impl ConicForm {
             nx,
             joints: m,
             free: d,
+            a_padded: Matrix::from_fn(n, padded, |i, j| if j < nx { a[(i, j)] } else { 0.0 }),
             a,
             eq_null_t,
             row_span,
@@ -357,17 +362,21 @@ impl ConicForm {
         scratch: &mut Vec<f64>,
     ) -> Certificate {
         let (rows, m, nx) = (self.rows(), self.joints, self.nx);
+        let w4 = self.a_padded.ncols();
         // Every entry used is written below: no clearing.
-        if scratch.len() < rows + 2 * nx {
-            scratch.resize(rows + 2 * nx, 0.0);
+        if scratch.len() < rows + 3 * w4 {
+            scratch.resize(rows + 3 * w4, 0.0);
         }
         let (s, rest) = scratch.split_at_mut(rows);
-        let (grad, gsize) = rest[..2 * nx].split_at_mut(nx);
+        let (xp, rest) = rest.split_at_mut(w4);
+        let (grad, gsize) = rest[..2 * w4].split_at_mut(w4);
+        xp[..nx].copy_from_slice(&x[..nx]);
+        xp[nx..].iter_mut().for_each(|v| *v = 0.0);
         // s = b − A x, with the size of its terms, in one pass.
         let mut scale = f64::MIN_POSITIVE;
         for (i, si) in s.iter_mut().enumerate() {
             let (lo, hi) = self.row_span[i];
-            let (ax, abs) = dot_abs4(&self.a.row(i)[lo..hi], &x[lo..hi]);
+            let (ax, abs) = dot_abs4(&self.a_padded.row(i)[lo..hi], &xp[lo..hi]);
             *si = b[i] - ax;
             scale = fmax(scale, b[i].abs() + abs);
         }
@@ -407,7 +416,7 @@ impl ConicForm {
             start += cone.dim();
         }
         // g = P x + A_inᵀ z_in, against Σ |terms| per column.
-        for j in 0..nx {
+        for j in 0..w4 {
             let g = if j < m { 2.0 * x[j] } else { 0.0 };
             grad[j] = g;
             gsize[j] = g.abs();
@@ -419,7 +428,7 @@ impl ConicForm {
             for ((g, gs), a) in grad
                 .iter_mut()
                 .zip(gsize.iter_mut())
-                .zip(&self.a.row(i)[lo..hi])
+                .zip(&self.a_padded.row(i)[lo..hi])
             {
                 let t = a * z[i];
                 *g += t;
@@ -431,7 +440,7 @@ impl ConicForm {
         let (residual, basis_ok) = match &self.eq_null_t {
             None => (grad.iter().fold(0.0f64, |a, g| fmax(a, g.abs())), true),
             Some(nt) => (
-                (0..nt.nrows()).fold(0.0f64, |a, r| fmax(a, dot4(nt.row(r), grad).abs())),
+                (0..nt.nrows()).fold(0.0f64, |a, r| fmax(a, dot4(nt.row(r), &grad[..nx]).abs())),
                 nt.ncols() == nx,
             ),
         };
