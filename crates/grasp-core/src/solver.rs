@@ -183,11 +183,9 @@ pub struct Diagnostics {
 }
 
 /// `v > limit`, or not a number.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 fn exceeds(v: f64, limit: f64) -> bool {
-    !matches!(
-        v.partial_cmp(&limit),
-        Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
-    )
+    !(v <= limit)
 }
 
 fn reason_with_message<S: Serializer>(r: &Option<Reason>, s: S) -> Result<S::Ok, S::Error> {
@@ -610,8 +608,9 @@ impl TorqueQp {
         }
         let limits = self.rows.len() - self.contacts.last().map_or(0, |c| c.first_row + c.rows);
         for (i, id) in self.rows.iter().enumerate().skip(self.rows.len() - limits) {
-            if let RowId::TorqueLimit { joint, .. } = *id {
-                let v = self.c0[i] - dot(self.h.row(i), tau);
+            if let RowId::TorqueLimit { joint, upper } = *id {
+                // The row is ±e_j (TorqueQp::new).
+                let v = self.c0[i] - if upper { -tau[joint] } else { tau[joint] };
                 viol = viol.max(v);
                 vbad |= exceeds(v, tol * (self.c0[i].abs() + tau[joint].abs()));
             }
