@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Exact cones side by side in one run: the native exact solver, Clarabel's exact cones
 # and the native linearised solve at N = 8, each the in-process median of `grasp-torque
-# bench` (model built once), interleaved fixture by fixture and repeated for ROUNDS
-# rounds; each figure is the lowest of its rounds' medians (the shared machine's load
-# only ever adds time).
+# bench` (model built once), interleaved: each round runs every fixture and solver
+# once, so a fixture's rounds spread over the whole run; each figure is the lowest of
+# its rounds' medians (the shared machine's load only ever adds time, and it changes
+# over seconds to minutes).
 # Cold: `cold_raw_us`, the backend alone. Warm: `warm_1pct_us`, a full `resolve` (with
 # the core's checks) after a 1 % wrench change.
 # Usage: bash scripts/bench_exact.sh [REPEATS] [ROUNDS]   (after `cargo build --release`)
@@ -14,8 +15,8 @@ repeats=${1:-1000}
 rounds=${2:-3}
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
-for f in fixtures/paper-example.json fixtures/hand3-pcwf.json fixtures/hand5-pcwf.json fixtures/hand4-sfcl.json fixtures/hand4-sfce.json fixtures/hand5-mixed.json fixtures/hands/allegro-pinch.json fixtures/hands/ability-tripod.json fixtures/hands/shadow-tripod.json; do
-  for _ in $(seq "$rounds"); do
+for _ in $(seq "$rounds"); do
+  for f in fixtures/paper-example.json fixtures/hand3-pcwf.json fixtures/hand5-pcwf.json fixtures/hand4-sfcl.json fixtures/hand4-sfce.json fixtures/hand5-mixed.json fixtures/hands/allegro-pinch.json fixtures/hands/ability-tripod.json fixtures/hands/shadow-tripod.json; do
     for kind in "lin --sides 8 --backend active-set" "nat --cones exact --backend active-set" "cla --cones exact --backend clarabel"; do
       set -- $kind
       tag=$1; shift
