@@ -239,7 +239,7 @@ impl Newton {
             .x
             .iter_mut()
             .chain(&mut self.y)
-            .chain(&mut self.nu_row)
+            .chain(&mut self.nu_row[self.orth.0..self.orth.1])
             .chain(&mut self.nu_cone)
         {
             *v *= f;
@@ -514,7 +514,17 @@ impl Newton {
         let mut previous = f64::INFINITY;
         for _ in 0..MAX_NEWTON {
             self.iterations += 1;
-            self.slacks();
+            // Only the constraints' slacks enter the residual (the caller computes
+            // the rest once it has converged).
+            for r in 0..nc {
+                let rows = match self.owner[r] {
+                    Owner::Row(i) => i..i + 1,
+                    Owner::Cone(k) => self.socs[k].0..self.socs[k].0 + self.socs[k].1,
+                };
+                for i in rows {
+                    self.s[i] = self.b_red[i] - dot4(self.a_red.row(i), &self.y);
+                }
+            }
             // t = −(P y + Σ ν_r ∇c_r(y)), cval = c(y).
             for j in 0..n {
                 self.t[j] = -2.0 * self.y[j];
