@@ -244,6 +244,10 @@ struct Workspace {
     /// Multipliers of the key set during the dual phase, in factor order.
     mult: Vec<f64>,
     factor: Factor,
+    /// Whether every row in `factor` entered with no elastic term (its column does
+    /// not depend on the wrench), and the last solve ended optimal there: a warm start
+    /// with the same key set then keeps the factor (a hot start).
+    reusable: bool,
 }
 
 impl ActiveSetSolver {
@@ -369,6 +373,7 @@ impl Engine {
             u: vec![0.0; m],
             mult: Vec::with_capacity(kp),
             factor: Factor::new(kp),
+            reusable: false,
         };
         Ok(Self {
             rows: qp.rows.to_vec(),
@@ -465,14 +470,27 @@ impl Engine {
             *b = self.c0n[r] - dot(self.mn.row(r), w);
         }
         self.pu.mul_vec_into(w, &mut ws.u);
-        // Starting point y0.
+        // Starting point y0. A hot start keeps the factor of the last key set when the
+        // warm one is that set: the rows do not depend on the wrench, only b does.
         ws.z.iter_mut().for_each(|v| *v = 0.0);
         ws.e.iter_mut().for_each(|v| *v = 0.0);
-        ws.in_set.iter_mut().for_each(|v| *v = false);
-        ws.factor.clear();
+        let hot = ws.reusable
+            && warm.active_set.is_some_and(|set| {
+                set.len() + 1 == ws.factor.rows().len()
+                    && set.iter().all(|&h| {
+                        let r = self.red_row[h];
+                        r != usize::MAX && ws.in_set[r]
+                    })
+            });
+        if !hot {
+            ws.in_set.iter_mut().for_each(|v| *v = false);
+            ws.factor.clear();
+        }
+        ws.reusable = true;
         let mut state = Iter::new(self);
         let end = state.run(warm);
         let iterations = state.iterations;
+        self.ws.reusable &= matches!(end, End::Optimal) && self.ws.factor.contains(S_ROW);
         out.iterations = iterations;
         match end {
             End::Optimal => {
@@ -615,6 +633,9 @@ impl<'s> Iter<'s> {
     fn add(&mut self, i: usize) -> bool {
         let k = self.k();
         let ws = &mut self.s.ws;
+        if i != S_ROW && ws.e[i] != 0.0 {
+            ws.reusable = false;
+        }
         let (a, e) = (&self.s.a, &ws.e);
         let tol = self.s.settings.dependence_tolerance;
         let ok = ws.factor.add(i, tol, |buf| {
@@ -667,8 +688,11 @@ impl<'s> Iter<'s> {
         let k = self.k();
         let nr = self.s.ws.b.len();
         if let Some(set) = warm.active_set {
-            // Start at the minimiser over the given key set with s fixed at 0.
-            self.add(S_ROW);
+            // Start at the minimiser over the given key set with s fixed at 0 (a hot
+            // start has its factor already).
+            if !self.s.ws.factor.contains(S_ROW) {
+                self.add(S_ROW);
+            }
             for &h in set {
                 let r = self.s.red_row[h];
                 if r != usize::MAX && !self.s.ws.in_set[r] {
