@@ -121,6 +121,40 @@ proptest! {
     }
 }
 
+/// A control loop: each tick warm-started from the last answer (mostly a hot start,
+/// the factor of the last key set kept), against a separate solver's cold solve.
+#[test]
+fn hot_started_control_loops_match_cold_solves() {
+    let mut ticks = 0;
+    for seed in 0..40u64 {
+        let p = problem(seed, 8);
+        let (mut hot, mut fresh) = (build(&p), build(&p));
+        let mut last = solve(&mut hot, &p.wrench, &WarmStart::default()).unwrap();
+        let mut w = p.wrench;
+        for k in 0..25 {
+            for (i, v) in w.iter_mut().enumerate() {
+                *v *= 1.0 + 0.005 * (((seed as usize + 7 * k + 3 * i) % 5) as f64 - 2.0);
+            }
+            let cold = solve(&mut fresh, &w, &WarmStart::default()).unwrap();
+            let warm = solve(&mut hot, &w, &WarmStart::from_solution(&last)).unwrap();
+            assert_eq!(cold.status, warm.status, "seed {seed} tick {k}");
+            if cold.status == Status::Optimal {
+                let rel =
+                    (warm.objective - cold.objective).abs() / cold.objective.max(f64::MIN_POSITIVE);
+                assert!(
+                    rel <= 1e-9,
+                    "seed {seed} tick {k}: {} vs {}",
+                    warm.objective,
+                    cold.objective
+                );
+                ticks += 1;
+            }
+            last = warm;
+        }
+    }
+    assert!(ticks > 500, "only {ticks} optimal ticks");
+}
+
 proptest! {
     #![proptest_config(ProptestConfig {
         cases: 200,
