@@ -17,7 +17,10 @@ pub(crate) struct Factor {
     u1: Vec<f64>,
     lambda: Vec<f64>,
     buf: Vec<f64>,
+    /// `Qᵀa` of the last row added or passed to [`Self::directions`].
     v: Vec<f64>,
+    /// `v` is `Qᵀa` for the current Q and the last [`Self::directions`] row.
+    v_current: bool,
 }
 
 /// Rotation zeroing `b` against `a`. Entries are O(1) here (unit rows), so the plain
@@ -43,6 +46,7 @@ impl Factor {
             lambda: vec![0.0; n],
             buf: vec![0.0; n],
             v: vec![0.0; n],
+            v_current: false,
         };
         f.clear();
         f
@@ -51,6 +55,7 @@ impl Factor {
     /// Empties the key set (Q = I).
     pub(crate) fn clear(&mut self) {
         self.rows.clear();
+        self.v_current = false;
         self.q.iter_mut().for_each(|x| *x = 0.0);
         for i in 0..self.n {
             self.q[i * self.n + i] = 1.0;
@@ -89,20 +94,41 @@ impl Factor {
     /// Adds the row written by `fill`; false (and no change) when it is within `tol`
     /// (relative) of the span of the key set, or the set is full.
     pub(crate) fn add(&mut self, id: usize, tol: f64, fill: impl FnOnce(&mut [f64])) -> bool {
-        let (n, t) = (self.n, self.rows.len());
-        if t == n {
+        if self.rows.len() == self.n {
             return false;
         }
         fill(&mut self.buf);
-        let anorm = self.buf.iter().map(|x| x * x).sum::<f64>().sqrt();
-        for j in 0..n {
-            self.v[j] = self.q[j * n..(j + 1) * n]
-                .iter()
-                .zip(&self.buf)
-                .map(|(a, b)| a * b)
-                .sum();
+        self.project_buf();
+        self.insert(id, tol)
+    }
+
+    /// [`Self::add`] for the row `a` last passed to [`Self::directions`]: its `Qᵀa` is
+    /// reused when Q has not changed since (the dual phase's full step).
+    pub(crate) fn add_direction_row(&mut self, id: usize, tol: f64, a: &[f64]) -> bool {
+        if self.rows.len() == self.n {
+            return false;
         }
-        let tail = self.v[t..].iter().map(|x| x * x).sum::<f64>().sqrt();
+        self.buf.copy_from_slice(&a[..self.n]);
+        if !self.v_current {
+            self.project_buf();
+        }
+        self.insert(id, tol)
+    }
+
+    /// `v = Qᵀ buf`.
+    fn project_buf(&mut self) {
+        let n = self.n;
+        for (vj, qj) in self.v.iter_mut().zip(self.q.chunks_exact(n)) {
+            *vj = dot(qj, &self.buf);
+        }
+    }
+
+    /// Adds the row in `buf`, whose `Qᵀ buf` is in `v`.
+    fn insert(&mut self, id: usize, tol: f64) -> bool {
+        let (n, t) = (self.n, self.rows.len());
+        self.v_current = false;
+        let anorm = dot(&self.buf, &self.buf).sqrt();
+        let tail = dot(&self.v[t..], &self.v[t..]).sqrt();
         // Also rejects NaN.
         if tail.partial_cmp(&(tol * anorm)) != Some(std::cmp::Ordering::Greater) {
             return false;
@@ -122,13 +148,10 @@ impl Factor {
     /// direction `R⁻¹ Q1ᵀ a` into [`Self::lambda`].
     pub(crate) fn directions(&mut self, a: &[f64], z: &mut [f64]) {
         let (n, t) = (self.n, self.rows.len());
-        for j in 0..n {
-            self.v[j] = self.q[j * n..(j + 1) * n]
-                .iter()
-                .zip(a)
-                .map(|(x, y)| x * y)
-                .sum();
+        for (vj, qj) in self.v.iter_mut().zip(self.q.chunks_exact(n)) {
+            *vj = dot(qj, &a[..n]);
         }
+        self.v_current = true;
         z[..n].iter_mut().for_each(|x| *x = 0.0);
         for j in t..n {
             let c = self.v[j];
@@ -148,6 +171,7 @@ impl Factor {
     /// Removes the key-set row at `pos`.
     pub(crate) fn remove(&mut self, pos: usize) {
         let (n, t) = (self.n, self.rows.len());
+        self.v_current = false;
         self.rows.remove(pos);
         self.r.copy_within((pos + 1) * n..t * n, pos * n);
         for j in pos..t - 1 {

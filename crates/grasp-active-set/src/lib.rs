@@ -212,15 +212,19 @@ struct Engine {
     pu: Matrix,
     /// Normalised rows `Ĥ`, R × k (R: rows of H that depend on τ).
     a: Matrix,
+    /// `a` column-major (column j at `j·R..`): the passes over every row (residuals,
+    /// right-hand side) run down columns, which vectorises where a row of k numbers
+    /// does not.
+    a_cols: Vec<f64>,
     /// Row r of `a` is row `h_row[r]` of H.
     h_row: Vec<usize>,
     /// Row of `a` for each row of H (`usize::MAX` for rows no torque affects).
     red_row: Vec<usize>,
     /// `‖(H D⁻¹ N)_i‖` of each reduced row.
     nu: Vec<f64>,
-    /// `ĉ = c0n − mn · w`.
+    /// `ĉ = c0n − mn · w`, with mn (R × 6) column-major like `a_cols`.
     c0n: Vec<f64>,
-    mn: Matrix,
+    mn_cols: Vec<f64>,
     /// Rows of H that no torque affects: `c0 − m · w ≤ 0` must hold as it is.
     fixed: Vec<usize>,
     fixed_c0: Vec<f64>,
@@ -349,7 +353,10 @@ impl Engine {
         let a = Matrix::from_fn(nr, k, |r, j| hn[(h_row[r], j)] / norms[h_row[r]]);
         let nu: Vec<f64> = h_row.iter().map(|&i| norms[i]).collect();
         let c0n: Vec<f64> = h_row.iter().map(|&i| qp.c0[i] / norms[i]).collect();
-        let mn = Matrix::from_fn(nr, 6, |r, j| mfull[(h_row[r], j)] / norms[h_row[r]]);
+        let a_cols = (0..k * nr).map(|x| a[(x % nr, x / nr)]).collect();
+        let mn_cols = (0..6 * nr)
+            .map(|x| mfull[(h_row[x % nr], x / nr)] / norms[h_row[x % nr]])
+            .collect();
         let fixed_c0 = fixed.iter().map(|&i| qp.c0[i]).collect();
         let fixed_m = Matrix::from_fn(fixed.len(), 6, |r, j| mfull[(fixed[r], j)]);
         // A fixed row whose wrench terms are themselves rounding (a contact that neither
@@ -384,11 +391,12 @@ impl Engine {
             null_basis,
             pu,
             a,
+            a_cols,
             h_row,
             red_row,
             nu,
             c0n,
-            mn,
+            mn_cols,
             fixed,
             fixed_c0,
             fixed_m,
@@ -466,9 +474,8 @@ impl Engine {
         }
         let ws = &mut self.ws;
         let k = self.null_basis.ncols();
-        for (r, b) in ws.b.iter_mut().enumerate() {
-            *b = self.c0n[r] - dot(self.mn.row(r), w);
-        }
+        ws.b.copy_from_slice(&self.c0n);
+        add_columns(&mut ws.b, &self.mn_cols, w, -1.0);
         self.pu.mul_vec_into(w, &mut ws.u);
         // Starting point y0. A hot start keeps the factor of the last key set when the
         // warm one is that set: the rows do not depend on the wrench, only b does.
@@ -537,6 +544,34 @@ impl Engine {
                 });
                 out.active_set = None;
             }
+        }
+    }
+}
+
+/// `out += sign · M x` for a column-major M (`out.len()` rows, one column per entry
+/// of x), four columns per pass over `out`.
+#[inline]
+fn add_columns(out: &mut [f64], cols: &[f64], x: &[f64], sign: f64) {
+    let n = out.len();
+    if n == 0 {
+        return;
+    }
+    let mut cs = cols.chunks_exact(n);
+    let mut xs = x.chunks_exact(4);
+    for xb in &mut xs {
+        let (x0, x1, x2, x3) = (sign * xb[0], sign * xb[1], sign * xb[2], sign * xb[3]);
+        let (Some(c0), Some(c1), Some(c2), Some(c3)) = (cs.next(), cs.next(), cs.next(), cs.next())
+        else {
+            return;
+        };
+        for ((((o, a), b), c), d) in out.iter_mut().zip(c0).zip(c1).zip(c2).zip(c3) {
+            *o += (x0 * a + x1 * b) + (x2 * c + x3 * d);
+        }
+    }
+    for (col, xj) in cs.zip(xs.remainder()) {
+        let xj = sign * xj;
+        for (o, c) in out.iter_mut().zip(col) {
+            *o += xj * c;
         }
     }
 }
@@ -613,17 +648,6 @@ impl<'s> Iter<'s> {
         self.s.null_basis.ncols()
     }
 
-    /// `a_i · v` in (y, s) space, for a row index or [`S_ROW`].
-    #[inline]
-    fn row_dot(&self, i: usize, v: &[f64]) -> f64 {
-        let k = self.k();
-        if i == S_ROW {
-            v[k]
-        } else {
-            dot(self.s.a.row(i), &v[..k]) + self.s.ws.e[i] * v[k]
-        }
-    }
-
     fn feas_tol(&self) -> f64 {
         let y = norm_inf(&self.s.ws.z[..self.k()]);
         self.s.settings.feasibility_tolerance * self.scale.max(y)
@@ -647,9 +671,26 @@ impl<'s> Iter<'s> {
                 buf[k] = e[i];
             }
         });
+        self.joined(i, ok)
+    }
+
+    /// [`Self::add`] for the dual phase's row `i`, which is in `d` and whose
+    /// directions were just computed.
+    fn add_direction_row(&mut self, i: usize) -> bool {
+        let ws = &mut self.s.ws;
+        if ws.e[i] != 0.0 {
+            ws.reusable = false;
+        }
+        let tol = self.s.settings.dependence_tolerance;
+        let ok = ws.factor.add_direction_row(i, tol, &ws.d);
+        self.joined(i, ok)
+    }
+
+    /// Records that row `i` joined the key set (when `ok`).
+    fn joined(&mut self, i: usize, ok: bool) -> bool {
         if ok && i != S_ROW {
-            ws.in_set[i] = true;
-            ws.resid[i] = 0.0;
+            self.s.ws.in_set[i] = true;
+            self.s.ws.resid[i] = 0.0;
         }
         ok
     }
@@ -667,20 +708,10 @@ impl<'s> Iter<'s> {
         let k = self.k();
         let ws = &mut self.s.ws;
         let (y, s) = (&ws.z[..k], ws.z[k]);
-        if k == 0 {
-            for (i, r) in ws.resid.iter_mut().enumerate() {
-                *r = ws.e[i] * s - ws.b[i];
-            }
-            return;
+        for ((r, e), b) in ws.resid.iter_mut().zip(&ws.e).zip(&ws.b) {
+            *r = e * s - b;
         }
-        for (i, (r, row)) in ws
-            .resid
-            .iter_mut()
-            .zip(self.s.a.as_slice().chunks_exact(k))
-            .enumerate()
-        {
-            *r = dot(row, y) + ws.e[i] * s - ws.b[i];
-        }
+        add_columns(&mut ws.resid, &self.s.a_cols, y, 1.0);
     }
 
     /// Step 1: a feasible start and its key set.
@@ -919,7 +950,7 @@ impl<'s> Iter<'s> {
                     }
                 }
                 if full {
-                    if self.add(p) {
+                    if self.add_direction_row(p) {
                         self.s.ws.mult.push(lam_p);
                         stalls = 0;
                     } else {
@@ -1039,12 +1070,17 @@ impl<'s> Iter<'s> {
             let mut alpha = 1.0;
             let mut block = None;
             let nr = self.s.ws.b.len();
+            // a_i · d for every row at once, down the columns (key-set rows unused).
+            let ws = &mut self.s.ws;
+            for (ad, e) in ws.ad.iter_mut().zip(&ws.e) {
+                *ad = e * ws.d[k];
+            }
+            add_columns(&mut ws.ad, &self.s.a_cols, &ws.d[..k], 1.0);
             for i in 0..nr {
                 if self.s.ws.in_set[i] {
                     continue;
                 }
-                let ad = self.row_dot(i, &self.s.ws.d);
-                self.s.ws.ad[i] = ad;
+                let ad = self.s.ws.ad[i];
                 if ad < -dep {
                     let ratio = self.s.ws.resid[i].max(0.0) / -ad;
                     // Rows are scanned in index order, so under Bland's rule the first
