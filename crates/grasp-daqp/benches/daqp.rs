@@ -1,7 +1,9 @@
 //! The native linearised solver against DAQP on the same QPs, per wrench, in one
 //! interleaved run (`bash scripts/fetch_daqp.sh && cargo bench -p grasp-daqp`).
 //!
-//! Each fixture at N = 4, 8 and 16 gives the QP the native solver sees
+//! The grasps: the bundled fixtures and the 41 reference cases of
+//! `shared/reference/cases.json` (`tests/data/reference-cases.json`, with the reference
+//! conventions), 50 grasps. Each at N = 4, 8 and 16 gives the QP the native solver sees
 //! (`min Σ w_j τ_j²` s.t. `H τ ≥ c(w)`, `C τ = e(w)`; `grasp-torque export-qp`), posed to
 //! DAQP as `min ½ τᵀ(2W)τ` s.t. `c(w) ≤ H τ`, `C τ = e(w)`. For each of a set of
 //! wrenches near the fixture's, interleaved call by call:
@@ -17,7 +19,7 @@
 //! `GT_BENCH_WRENCHES` (default 10) wrenches per QP.
 
 use grasp_daqp::{Daqp, INFINITY};
-use grasp_torque::{Backend, GraspSolver, Solution, SolverConfig, Status, WarmStart};
+use grasp_torque::{Backend, GraspProblem, GraspSolver, Solution, SolverConfig, Status, WarmStart};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -63,7 +65,7 @@ impl Lcg {
 }
 
 struct Row {
-    family: &'static str,
+    family: String,
     name: String,
     sides: usize,
     rows: usize,
@@ -84,10 +86,28 @@ fn main() {
     let repeats = env("GT_BENCH_REPEATS", 200).max(1);
     let wrenches = env("GT_BENCH_WRENCHES", 10).max(1);
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../");
+    let mut grasps: Vec<(String, String, GraspProblem)> = FIXTURES
+        .iter()
+        .map(|(family, file)| {
+            let name = file.rsplit('/').next().unwrap().trim_end_matches(".json");
+            let p = grasp_torque::load(format!("{root}{file}")).unwrap().problem;
+            (family.to_string(), name.to_string(), p)
+        })
+        .collect();
+    for case in grasp_testkit::reference_cases() {
+        let name = case["name"].as_str().unwrap().to_string();
+        // h3x4-sfcl-9: the contact model names the family.
+        let family = name.split('-').nth(1).unwrap_or("reference").to_string();
+        grasps.push((
+            format!("ref {family}"),
+            name,
+            grasp_testkit::reference_problem(&case["problem"]),
+        ));
+    }
     let mut out = Vec::new();
-    for (family, file) in FIXTURES {
+    for (index, (family, name, problem)) in grasps.into_iter().enumerate() {
         for sides in [4, 8, 16] {
-            let mut p = grasp_torque::load(format!("{root}{file}")).unwrap().problem;
+            let mut p = problem.clone();
             p.linearization.sides = sides;
             let config = SolverConfig {
                 backend: Some(Backend::ActiveSet),
@@ -115,9 +135,9 @@ fn main() {
             upper[..e].iter_mut().for_each(|v| *v = 0.0);
             let mut daqp = Daqp::new(n, h, a, lower, upper, &equality, 1e-9).unwrap();
             let (mut c, mut ev) = (vec![0.0; r], vec![0.0; e]);
-            let mut rng = Lcg(0x9e3779b97f4a7c15 ^ (sides as u64) ^ file.len() as u64);
+            let mut rng = Lcg(0x9e3779b97f4a7c15 ^ (sides as u64) ^ ((index as u64) << 8));
             let (mut cold_t, mut warm_t, mut daqp_t, mut daqp_s) = (vec![], vec![], vec![], vec![]);
-            let (mut solved, mut worst_rel) = (0, 0.0f64);
+            let (mut tried, mut solved, mut worst_rel) = (0, 0, 0.0f64);
             let cold = WarmStart::default();
             for k in 0..wrenches {
                 let w: [f64; 6] = std::array::from_fn(|i| {
@@ -131,6 +151,7 @@ fn main() {
                 if sol.status != Status::Optimal || prev.status != Status::Optimal {
                     continue;
                 }
+                tried += 1;
                 let objective: f64 = sol
                     .torque
                     .iter()
@@ -186,13 +207,8 @@ fn main() {
             }
             let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
             out.push(Row {
-                family,
-                name: file
-                    .rsplit('/')
-                    .next()
-                    .unwrap()
-                    .trim_end_matches(".json")
-                    .into(),
+                family: family.clone(),
+                name: name.clone(),
                 sides,
                 rows: r,
                 cold: mean(&cold_t),
@@ -200,12 +216,12 @@ fn main() {
                 daqp: mean(&daqp_t),
                 daqp_solve: mean(&daqp_s),
                 solved,
-                tried: wrenches,
+                tried,
                 worst_rel,
             });
         }
     }
-    println!("| family | fixture | N | rows | native cold µs | native warm µs | DAQP per wrench µs | DAQP solve_time µs | cold / DAQP | cold / DAQP solve_time | solved | objective agreement |");
+    println!("| family | grasp | N | rows | native cold µs | native warm µs | DAQP per wrench µs | DAQP solve_time µs | cold / DAQP | cold / DAQP solve_time | solved | objective agreement |");
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for r in &out {
         println!(
@@ -223,6 +239,29 @@ fn main() {
             r.solved,
             r.tried,
             r.worst_rel
+        );
+    }
+    // Per family: the shifted geometric means over its QPs and how often native wins.
+    println!();
+    println!("| family | QPs | native cold µs | DAQP per wrench µs | DAQP solve_time µs | cold / DAQP | cold / solve_time | cold ≤ DAQP | cold ≤ solve_time |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    let mut families: Vec<&str> = Vec::new();
+    for r in &out {
+        if !families.contains(&r.family.as_str()) {
+            families.push(&r.family);
+        }
+    }
+    for f in families {
+        let rows: Vec<&Row> = out.iter().filter(|r| r.family == f).collect();
+        let g = |v: fn(&Row) -> f64| sgm(&rows.iter().map(|r| v(r)).collect::<Vec<_>>());
+        let (c, d, t) = (g(|r| r.cold), g(|r| r.daqp), g(|r| r.daqp_solve));
+        println!(
+            "| {f} | {} | {c:.2} | {d:.2} | {t:.2} | {:.2}× | {:.2}× | {} | {} |",
+            rows.len(),
+            c / d,
+            c / t,
+            rows.iter().filter(|r| r.cold <= r.daqp).count(),
+            rows.iter().filter(|r| r.cold <= r.daqp_solve).count()
         );
     }
     let col = |f: fn(&Row) -> f64| out.iter().map(f).collect::<Vec<_>>();
