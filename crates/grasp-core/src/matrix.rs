@@ -102,16 +102,37 @@ impl Matrix {
     /// The product `self · other`.
     pub fn matmul(&self, other: &Matrix) -> Matrix {
         assert_eq!(self.cols, other.rows, "matmul dimension mismatch");
-        let mut out = Matrix::zeros(self.rows, other.cols);
-        for i in 0..self.rows {
-            for k in 0..self.cols {
-                let a = self[(i, k)];
-                if a != 0.0 {
-                    let orow = other.row(k);
-                    for (o, b) in out.row_mut(i).iter_mut().zip(orow) {
-                        *o += a * b;
+        let (inner, c) = (self.cols, other.cols);
+        let mut out = Matrix::zeros(self.rows, c);
+        if inner == 0 || c == 0 {
+            return out;
+        }
+        // Blocks of eight output columns accumulate in a local array across the whole
+        // inner dimension (each entry summed in k order, zeros of `self` skipped):
+        // the small matrices here are otherwise bound by reloading the output row.
+        for (arow, orow) in self
+            .data
+            .chunks_exact(inner)
+            .zip(out.data.chunks_exact_mut(c))
+        {
+            for (j0, block) in (0..c).step_by(8).zip(orow.chunks_mut(8)) {
+                let mut acc = [0.0f64; 8];
+                for (k, &a) in arow.iter().enumerate() {
+                    if a == 0.0 {
+                        continue;
+                    }
+                    let b = &other.data[k * c + j0..];
+                    if let Ok(b8) = <&[f64; 8]>::try_from(&b[..block.len().min(8)]) {
+                        for l in 0..8 {
+                            acc[l] += a * b8[l];
+                        }
+                    } else {
+                        for (x, y) in acc.iter_mut().zip(&b[..block.len()]) {
+                            *x += a * y;
+                        }
                     }
                 }
+                block.copy_from_slice(&acc[..block.len()]);
             }
         }
         out
@@ -193,6 +214,29 @@ pub fn dot4(a: &[f64], b: &[f64]) -> f64 {
         .iter()
         .zip(cb.remainder())
         .map(|(x, y)| x * y)
+        .sum();
+    (s[0] + s[1]) + (s[2] + s[3]) + tail
+}
+
+/// `Σ |a_i b_i|` over the shorter length, in four lanes like [`dot4`]: the size of the
+/// terms behind a dot product, for rounding bounds.
+#[inline]
+pub fn abs_dot4(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut s = [0.0f64; 4];
+    let mut ca = a.chunks_exact(4);
+    let mut cb = b.chunks_exact(4);
+    for (x, y) in (&mut ca).zip(&mut cb) {
+        for l in 0..4 {
+            s[l] += (x[l] * y[l]).abs();
+        }
+    }
+    let tail: f64 = ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .map(|(x, y)| (x * y).abs())
         .sum();
     (s[0] + s[1]) + (s[2] + s[3]) + tail
 }

@@ -5,7 +5,7 @@
 //! a backend calls optimal whose residuals exceed the backend's stated accuracy,
 //! relative to the problem's own scale, is reported as a numerical failure instead.
 
-use crate::matrix::{dot, norm_inf};
+use crate::matrix::{abs_dot4, dot, norm_inf};
 use crate::model::Equilibrium;
 use crate::qp::{ConeRepr, RowId, TorqueQp};
 use serde::{Serialize, Serializer};
@@ -180,6 +180,41 @@ pub struct Diagnostics {
     pub wrench_check: f64,
     /// The same for `Jᵀ f = τ`.
     pub torque_check: f64,
+}
+
+/// The largest `r / bound` of a check's rows (r > 0), kept as a fraction: one division
+/// at the end instead of one per row.
+#[derive(Clone, Copy)]
+struct WorstRatio {
+    r: f64,
+    bound: f64,
+}
+
+impl WorstRatio {
+    const NONE: Self = Self { r: 0.0, bound: 1.0 };
+
+    #[inline]
+    fn add(&mut self, r: f64, bound: f64) {
+        if r * self.bound > self.r * bound {
+            *self = Self { r, bound };
+        }
+    }
+
+    fn value(self) -> f64 {
+        self.r / self.bound
+    }
+}
+
+/// A cone row times its contact's force (1, 3 or 4 components), written out: at
+/// these lengths a general dot product costs several times the arithmetic.
+#[inline]
+fn face_dot(a: &[f64], b: &[f64]) -> f64 {
+    match (a, b) {
+        ([a0], [b0]) => a0 * b0,
+        ([a0, a1, a2], [b0, b1, b2]) => a0 * b0 + a1 * b1 + a2 * b2,
+        ([a0, a1, a2, a3], [b0, b1, b2, b3]) => (a0 * b0 + a1 * b1) + (a2 * b2 + a3 * b3),
+        _ => dot(a, b),
+    }
 }
 
 /// `v > limit`, or not a number.
@@ -487,7 +522,7 @@ impl TorqueQp {
             .fold(0.0f64, |a, (v, u)| a.max((v * u).abs()));
         let admitted = 10.0 * model.rank_tolerance * norm_inf(&model.scaled_wrench(w));
         let rounding = 1e3 * f64::EPSILON * (6 + model.joints() + model.passive_dim()) as f64;
-        let (mut wres, mut wbad, mut wratio) = (0.0f64, false, 0.0f64);
+        let (mut wres, mut wbad, mut wratio) = (0.0f64, false, WorstRatio::NONE);
         for i in 0..6 {
             let row = model.grasp_matrix.row(i);
             let r = (dot(row, f) - w[i]).abs();
@@ -500,10 +535,10 @@ impl TorqueQp {
                 wbad |= exceeds(r * ri, bound);
             }
             if r > 0.0 {
-                wratio = wratio.max(r * ri / bound);
+                wratio.add(r * ri, bound);
             }
         }
-        let (mut tres, mut tbad, mut tratio) = (0.0f64, false, 0.0f64);
+        let (mut tres, mut tbad, mut tratio) = (0.0f64, false, WorstRatio::NONE);
         for (j, t) in tau.iter().enumerate() {
             let row = model.jacobian_transpose.row(j);
             let r = (dot(row, f) - t).abs();
@@ -516,7 +551,7 @@ impl TorqueQp {
                 tbad |= exceeds(r * rj, bound);
             }
             if r > 0.0 {
-                tratio = tratio.max(r * rj / bound);
+                tratio.add(r * rj, bound);
             }
         }
         // E f = 0: the joint torques stay in the range of the transmission.
@@ -531,7 +566,7 @@ impl TorqueQp {
                 tbad |= exceeds(r * ri, bound);
             }
             if r > 0.0 {
-                tratio = tratio.max(r * ri / bound);
+                tratio.add(r * ri, bound);
             }
         }
         match &model.actuators {
@@ -542,24 +577,14 @@ impl TorqueQp {
                 // own terms (the rows above are its image under T⁺ and Q₂ᵀ).
                 for (i, t) in out.joint_torque.iter().enumerate() {
                     let row = a.joint_jacobian_transpose.row(i);
-                    let (mut v, mut size) = (-t, 0.0);
-                    for ((x, fj), unit) in row.iter().zip(f).zip(&model.force_unit) {
-                        v += x * fj;
-                        size += (x * unit).abs() * fmax;
-                    }
-                    size += a
-                        .transmission
-                        .row(i)
-                        .iter()
-                        .zip(tau)
-                        .map(|(x, u)| (x * u).abs())
-                        .sum::<f64>();
-                    let r = v.abs();
+                    let size = abs_dot4(row, &model.force_unit) * fmax
+                        + abs_dot4(a.transmission.row(i), tau);
+                    let r = (dot(row, f) - t).abs();
                     tres = tres.max(r);
                     let bound = (tol + rounding) * size;
                     tbad |= exceeds(r, bound);
                     if r > 0.0 {
-                        tratio = tratio.max(r / bound.max(f64::MIN_POSITIVE));
+                        tratio.add(r, bound.max(f64::MIN_POSITIVE));
                     }
                 }
             }
@@ -567,8 +592,8 @@ impl TorqueQp {
         }
         d.wrench_residual = wres;
         d.torque_residual = tres;
-        d.wrench_check = wratio;
-        d.torque_check = tratio;
+        d.wrench_check = wratio.value();
+        d.torque_check = tratio.value();
         d.consistency_residual = (0..model.equality_rows())
             .map(|i| (dot(model.eq.row(i), tau) + dot(model.eq_w.row(i), w)).abs())
             .fold(0.0, f64::max);
@@ -594,7 +619,7 @@ impl TorqueQp {
             for k in 0..c.rows {
                 let i = c.first_row + k;
                 let sf = match faces {
-                    Some(s) => dot(s.row(k), fc),
+                    Some(s) => face_dot(s.row(k), fc),
                     None => fc[c.model.normal_index()],
                 };
                 let v = self.c0[i] - sf;
