@@ -208,8 +208,10 @@ struct Engine {
     dinv: Vec<f64>,
     /// N, m × k: orthonormal null-space basis of `C D⁻¹`.
     null_basis: Matrix,
-    /// `u0 = pu · w`, m × 6.
-    pu: Matrix,
+    /// N column-major (column l at `l·m..`), for `τ = D⁻¹(u0 + N y)` per solve.
+    null_cols: Vec<f64>,
+    /// `u0 = pu · w`, with pu (m × 6) column-major.
+    pu_cols: Vec<f64>,
     /// Normalised rows `Ĥ`, R × k (R: rows of H that depend on τ).
     a: Matrix,
     /// `a` column-major (column j at `j·R..`): the passes over every row (residuals,
@@ -323,6 +325,8 @@ impl Engine {
         let pinv = dec.row_basis.matmul(&dec.row_transform);
         let pu = pinv.matmul(qp.eq_w);
         let pu = Matrix::from_fn(m, 6, |i, j| -pu[(i, j)]);
+        let null_cols = (0..k * m).map(|x| null_basis[(x % m, x / m)]).collect();
+        let pu_cols = (0..6 * m).map(|x| pu[(x % m, x / m)]).collect();
         let hd = scale_cols(qp.h);
         let hn = hd.matmul(&null_basis);
         // ĉ(w) = c0 − (hw + Hd pu) w, before normalisation.
@@ -389,7 +393,8 @@ impl Engine {
             settings,
             dinv,
             null_basis,
-            pu,
+            null_cols,
+            pu_cols,
             a,
             a_cols,
             h_row,
@@ -476,7 +481,8 @@ impl Engine {
         let k = self.null_basis.ncols();
         ws.b.copy_from_slice(&self.c0n);
         add_columns(&mut ws.b, &self.mn_cols, w, -1.0);
-        self.pu.mul_vec_into(w, &mut ws.u);
+        ws.u.iter_mut().for_each(|v| *v = 0.0);
+        add_columns(&mut ws.u, &self.pu_cols, w, 1.0);
         // Starting point y0. A hot start keeps the factor of the last key set when the
         // warm one is that set: the rows do not depend on the wrench, only b does.
         ws.z.iter_mut().for_each(|v| *v = 0.0);
@@ -593,9 +599,11 @@ impl Engine {
         let ws = &self.ws;
         let k = self.null_basis.ncols();
         let m = self.m;
-        out.torque.resize(m, 0.0);
-        for j in 0..m {
-            out.torque[j] = (ws.u[j] + dot(self.null_basis.row(j), &ws.z[..k])) * self.dinv[j];
+        out.torque.clear();
+        out.torque.extend_from_slice(&ws.u[..m]);
+        add_columns(&mut out.torque, &self.null_cols, &ws.z[..k], 1.0);
+        for (t, d) in out.torque.iter_mut().zip(&self.dinv) {
+            *t *= d;
         }
         let active = out.active_set.get_or_insert_with(Vec::new);
         active.clear();
