@@ -557,7 +557,7 @@ impl Engine {
 /// `out += sign · M x` for a column-major M (`out.len()` rows, one column per entry
 /// of x), four columns per pass over `out`.
 #[inline]
-fn add_columns(out: &mut [f64], cols: &[f64], x: &[f64], sign: f64) {
+pub(crate) fn add_columns(out: &mut [f64], cols: &[f64], x: &[f64], sign: f64) {
     let n = out.len();
     if n == 0 {
         return;

@@ -88,6 +88,8 @@ pub(crate) struct Newton {
     null_basis_t: Matrix,
     /// Rows of A times N (rows × k); the equality rows unused.
     a_red: Matrix,
+    /// Rows `eq..` of `a_red` column-major, for the pass over every slack.
+    a_red_cols: Vec<f64>,
     /// Per second-order cone, the Gram matrix `A1ᵀ A1` of its tail rows in the
     /// reduced variables (k × k each): the curvature `A1ᵀ (I − uuᵀ) A1` is then
     /// `G − (A1ᵀu)(A1ᵀu)ᵀ`, O(k²) per cone and iteration.
@@ -200,6 +202,9 @@ impl Newton {
             xp_map,
             null_basis_t: null_basis.transpose(),
             null_basis,
+            a_red_cols: (0..(rows - eq) * k)
+                .map(|x| a_red[(eq + x % (rows - eq), x / (rows - eq))])
+                .collect(),
             a_red,
             b_red: vec![0.0; rows],
             xp: vec![0.0; form.nx],
@@ -422,9 +427,9 @@ impl Newton {
 
     /// `s = b − A x` on the inequality rows, in the reduced variables.
     fn slacks(&mut self) {
-        for i in self.eq..self.s.len() {
-            self.s[i] = self.b_red[i] - dot4(self.a_red.row(i), &self.y);
-        }
+        let eq = self.eq;
+        self.s[eq..].copy_from_slice(&self.b_red[eq..]);
+        crate::add_columns(&mut self.s[eq..], &self.a_red_cols, &self.y, -1.0);
     }
 
     /// The conic dual of the current multipliers.
