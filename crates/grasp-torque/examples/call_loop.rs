@@ -1,0 +1,65 @@
+//! One kind of call in a loop, for instruction counts (valgrind) and profiles (perf),
+//! which are steadier on a shared machine than timings: `scripts/instructions.sh`.
+//!
+//! Run: `cargo run --release -p grasp-torque --example call_loop -- FILE KIND N [exact]`
+//! with KIND one of `cold` (the backend alone from a cold start), `check` (the core's
+//! completion and residual check of that answer), `full` (`GraspSolver::solve`),
+//! `warm` (the backend from the answer for a wrench 1 % away, alternating) and `build`
+//! (`GraspSolver::new`); the linear view at N = 8 unless `exact`.
+
+use grasp_torque::{solve_into, Cones, GraspSolver, Solution, SolverConfig, WarmStart};
+use std::hint::black_box;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let [_, file, kind, n, rest @ ..] = args.as_slice() else {
+        return Err("usage: call_loop FILE cold|check|full|warm|build N [exact]".into());
+    };
+    let n: usize = n.parse()?;
+    let mut p = grasp_torque::load(file)?.problem;
+    p.linearization.sides = 8;
+    let config = SolverConfig {
+        cones: if rest.first().is_some_and(|a| a == "exact") {
+            Cones::Exact
+        } else {
+            Cones::Linear
+        },
+        ..Default::default()
+    };
+    let mut solver = GraspSolver::new(&p, &config)?;
+    let mut backend = config.build(solver.problem().clone())?;
+    let cold = WarmStart::default();
+    let mut answer = Solution::default();
+    solve_into(backend.as_mut(), &p.wrench, &cold, &mut answer)?;
+    let tol = backend.residual_tolerance();
+    let near: [f64; 6] = std::array::from_fn(|i| p.wrench[i] * 1.01);
+    let (mut last, mut other) = (answer.clone(), Solution::default());
+    for i in 0..n {
+        match kind.as_str() {
+            "cold" => backend.solve_raw(black_box(&p.wrench), &cold, &mut answer),
+            "check" => {
+                backend
+                    .problem()
+                    .complete(black_box(&p.wrench), tol, "active-set", &mut answer)
+            }
+            "full" => {
+                black_box(solver.solve(black_box(&p.wrench), &cold)?.status);
+            }
+            "warm" => {
+                let w = if i % 2 == 0 { &near } else { &p.wrench };
+                let warm = WarmStart {
+                    torque: Some(&last.torque),
+                    active_set: last.active_set.as_deref(),
+                };
+                backend.solve_raw(black_box(w), &warm, &mut other);
+                std::mem::swap(&mut last, &mut other);
+            }
+            "build" => {
+                black_box(GraspSolver::new(black_box(&p), &config)?);
+            }
+            _ => return Err(format!("unknown kind {kind}").into()),
+        }
+    }
+    black_box(&answer);
+    Ok(())
+}
