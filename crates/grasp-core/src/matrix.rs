@@ -198,30 +198,19 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// reassociate floating-point sums, so the lanes that let it vectorise are written out).
 #[inline]
 pub fn dot4(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let mut s = [0.0f64; 4];
-    let mut ca = a.chunks_exact(4);
-    let mut cb = b.chunks_exact(4);
-    for (x, y) in (&mut ca).zip(&mut cb) {
-        s[0] += x[0] * y[0];
-        s[1] += x[1] * y[1];
-        s[2] += x[2] * y[2];
-        s[3] += x[3] * y[3];
-    }
-    let tail: f64 = ca
-        .remainder()
-        .iter()
-        .zip(cb.remainder())
-        .map(|(x, y)| x * y)
-        .sum();
-    (s[0] + s[1]) + (s[2] + s[3]) + tail
+    sum4(a, b, |x, y| x * y)
 }
 
 /// `Σ |a_i b_i|` over the shorter length, in four lanes like [`dot4`]: the size of the
 /// terms behind a dot product, for rounding bounds.
 #[inline]
 pub fn abs_dot4(a: &[f64], b: &[f64]) -> f64 {
+    sum4(a, b, |x, y| (x * y).abs())
+}
+
+/// `Σ term(a_i, b_i)` in four lanes, then the tail.
+#[inline(always)]
+fn sum4(a: &[f64], b: &[f64], term: impl Fn(f64, f64) -> f64) -> f64 {
     let n = a.len().min(b.len());
     let (a, b) = (&a[..n], &b[..n]);
     let mut s = [0.0f64; 4];
@@ -229,14 +218,14 @@ pub fn abs_dot4(a: &[f64], b: &[f64]) -> f64 {
     let mut cb = b.chunks_exact(4);
     for (x, y) in (&mut ca).zip(&mut cb) {
         for l in 0..4 {
-            s[l] += (x[l] * y[l]).abs();
+            s[l] += term(x[l], y[l]);
         }
     }
     let tail: f64 = ca
         .remainder()
         .iter()
         .zip(cb.remainder())
-        .map(|(x, y)| (x * y).abs())
+        .map(|(x, y)| term(*x, *y))
         .sum();
     (s[0] + s[1]) + (s[2] + s[3]) + tail
 }
