@@ -374,21 +374,6 @@ impl TorqueQp {
         }
     }
 
-    /// Row `k` of contact `ci` applied to its force `fc`: `(S_k · fc, Σ |S_kj fc_j|)`.
-    pub fn row_on_force(&self, ci: usize, k: usize, fc: &[f64]) -> (f64, f64) {
-        match &self.constraints.cones[ci] {
-            ConeRepr::Inscribed(cone) => {
-                let row = cone.faces.row(k);
-                let abs = row.iter().zip(fc).map(|(a, b)| (a * b).abs()).sum();
-                (dot(row, fc), abs)
-            }
-            ConeRepr::Exact => {
-                let fz = fc[self.model.contacts[ci].normal_index()];
-                (fz, fz.abs())
-            }
-        }
-    }
-
     /// The least-distance form in τ, for the native solver.
     pub fn least_distance(&self) -> LeastDistance<'_> {
         LeastDistance {

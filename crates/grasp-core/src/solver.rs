@@ -205,16 +205,38 @@ impl WorstRatio {
     }
 }
 
-/// A cone row times its contact's force (1, 3 or 4 components), written out: at
-/// these lengths a general dot product costs several times the arithmetic.
-#[inline]
-fn face_dot(a: &[f64], b: &[f64]) -> f64 {
-    match (a, b) {
-        ([a0], [b0]) => a0 * b0,
-        ([a0, a1, a2], [b0, b1, b2]) => a0 * b0 + a1 * b1 + a2 * b2,
-        ([a0, a1, a2, a3], [b0, b1, b2, b3]) => (a0 * b0 + a1 * b1) + (a2 * b2 + a3 * b3),
-        _ => dot(a, b),
+/// One contact's rows `c0_k − s_k · f_c ≤ 0` (faces of `D` components, row-major):
+/// raises `viol` to the worst and returns whether a row fails at `tol`. At these
+/// lengths a general dot product costs several times the arithmetic, hence `D` fixed.
+/// A row over the cheap bound `tol (|c0| + F)` pays for its own terms `Σ |s f|`.
+#[inline(always)]
+fn cone_rows<const D: usize>(
+    faces: &[f64],
+    fc: &[f64],
+    c0: &[f64],
+    tol: f64,
+    fscale: f64,
+    viol: &mut f64,
+) -> bool {
+    let fc: &[f64; D] = fc
+        .try_into()
+        .expect("contact force of its model's dimension");
+    let mut bad = false;
+    for (s, &c) in faces.chunks_exact(D).zip(c0) {
+        let sf = if D == 4 {
+            (s[0] * fc[0] + s[1] * fc[1]) + (s[2] * fc[2] + s[3] * fc[3])
+        } else {
+            (0..D).map(|k| s[k] * fc[k]).sum()
+        };
+        let v = c - sf;
+        *viol = viol.max(v);
+        let cheap = tol * (c.abs() + fscale);
+        if exceeds(v, cheap) {
+            let terms: f64 = (0..D).map(|k| (s[k] * fc[k]).abs()).sum();
+            bad |= exceeds(v, cheap + tol * terms);
+        }
     }
+    bad
 }
 
 /// `v > limit`, or not a number.
@@ -610,26 +632,30 @@ impl TorqueQp {
         // c − H τ = fmin − S f on contact rows (S is block-diagonal: a few flops per
         // row), and the limit rows read τ directly.
         let (mut viol, mut vbad) = (0.0f64, false);
-        for (ci, c) in self.contacts.iter().enumerate() {
-            let fc = &f[c.offset..c.offset + c.model.dim()];
-            let faces = match &self.constraints.cones[ci] {
-                ConeRepr::Inscribed(cone) => Some(&cone.faces),
-                ConeRepr::Exact => None,
-            };
-            for k in 0..c.rows {
-                let i = c.first_row + k;
-                let sf = match faces {
-                    Some(s) => face_dot(s.row(k), fc),
-                    None => fc[c.model.normal_index()],
-                };
-                let v = self.c0[i] - sf;
-                viol = viol.max(v);
-                // Only a row over the cheap bound pays for its own terms.
-                let cheap = tol * (self.c0[i].abs() + fscale);
-                if exceeds(v, cheap) {
-                    vbad |= exceeds(v, cheap + tol * self.row_on_force(ci, k, fc).1);
+        for (c, repr) in self.contacts.iter().zip(&self.constraints.cones) {
+            let dim = c.model.dim();
+            let fc = &f[c.offset..c.offset + dim];
+            let c0 = &self.c0[c.first_row..c.first_row + c.rows];
+            let bad = match repr {
+                ConeRepr::Inscribed(cone) => {
+                    let faces = cone.faces.as_slice();
+                    match dim {
+                        1 => cone_rows::<1>(faces, fc, c0, tol, fscale, &mut viol),
+                        3 => cone_rows::<3>(faces, fc, c0, tol, fscale, &mut viol),
+                        _ => cone_rows::<4>(faces, fc, c0, tol, fscale, &mut viol),
+                    }
                 }
-            }
+                ConeRepr::Exact => {
+                    let mut unit = [0.0; 4];
+                    unit[c.model.normal_index()] = 1.0;
+                    match dim {
+                        1 => cone_rows::<1>(&unit[..1], fc, c0, tol, fscale, &mut viol),
+                        3 => cone_rows::<3>(&unit[..3], fc, c0, tol, fscale, &mut viol),
+                        _ => cone_rows::<4>(&unit, fc, c0, tol, fscale, &mut viol),
+                    }
+                }
+            };
+            vbad |= bad;
         }
         let limits = self.rows.len() - self.contacts.last().map_or(0, |c| c.first_row + c.rows);
         for (i, id) in self.rows.iter().enumerate().skip(self.rows.len() - limits) {
