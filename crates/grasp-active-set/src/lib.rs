@@ -307,8 +307,7 @@ impl Engine {
         settings.validate()?;
         let m = qp.h.ncols();
         let dinv: Vec<f64> = qp.weights.iter().map(|w| 1.0 / w.sqrt()).collect();
-        let scale_cols = |a: &Matrix| Matrix::from_fn(a.nrows(), m, |i, j| a[(i, j)] * dinv[j]);
-        let cd = scale_cols(qp.eq);
+        let cd = Matrix::from_fn(qp.eq.nrows(), m, |i, j| qp.eq[(i, j)] * dinv[j]);
         // The core decided the rank: every row of C is independent. Weighting must not
         // make them dependent.
         let rc = qp.eq.nrows();
@@ -321,27 +320,38 @@ impl Engine {
         }
         let k = m - rc;
         let null_basis = dec.null_basis;
-        // u0 = Cd⁺ e = −Cd⁺ eq_w w.
-        let pinv = dec.row_basis.matmul(&dec.row_transform);
-        let pu = pinv.matmul(qp.eq_w);
-        let pu = Matrix::from_fn(m, 6, |i, j| -pu[(i, j)]);
-        let null_cols = (0..k * m).map(|x| null_basis[(x % m, x / m)]).collect();
-        let pu_cols = (0..6 * m).map(|x| pu[(x % m, x / m)]).collect();
-        let hd = scale_cols(qp.h);
-        let hn = hd.matmul(&null_basis);
-        // ĉ(w) = c0 − (hw + Hd pu) w, before normalisation.
+        // u0 = Cd⁺ e = −row_basis (row_transform eq_w) w: the small product first.
+        let pu = dec.row_basis.matmul(&dec.row_transform.matmul(qp.eq_w));
+        let null_cols = column_major(m, k, |i, j| null_basis[(i, j)]);
+        let pu_cols = column_major(m, 6, |i, j| -pu[(i, j)]);
+        // One product for both: H D⁻¹ [N | −pu], with D⁻¹ folded into the short side.
+        let np = Matrix::from_fn(m, k + 6, |i, j| {
+            dinv[i]
+                * if j < k {
+                    null_basis[(i, j)]
+                } else {
+                    -pu[(i, j - k)]
+                }
+        });
+        let hnp = qp.h_mul(&np);
         let rows = qp.h.nrows();
-        let mfull = {
-            let hp = hd.matmul(&pu);
-            Matrix::from_fn(rows, 6, |i, j| qp.hw[(i, j)] + hp[(i, j)])
-        };
+        let hn = |i: usize| &hnp.row(i)[..k];
+        // ĉ(w) = c0 − (hw + Hd pu) w, before normalisation.
+        let mfull = |i: usize, j: usize| qp.hw[(i, j)] + hnp[(i, k + j)];
         let norms: Vec<f64> = (0..rows)
-            .map(|i| grasp_core::matrix::norm2(hn.row(i)))
+            .map(|i| grasp_core::matrix::norm2(hn(i)))
             .collect();
-        // A row no torque affects: its norm in y is at rounding level of H's.
+        // A row no torque affects: its norm in y is at rounding level of H D⁻¹'s.
         let hscale = (0..rows)
-            .map(|i| grasp_core::matrix::norm2(hd.row(i)))
-            .fold(0.0, f64::max);
+            .map(|i| {
+                let r = qp.h.row(i);
+                r.iter()
+                    .zip(&dinv)
+                    .map(|(h, d)| (h * d) * (h * d))
+                    .sum::<f64>()
+            })
+            .fold(0.0, f64::max)
+            .sqrt();
         let zero = 1e3 * f64::EPSILON * (m as f64) * hscale.max(f64::MIN_POSITIVE);
         let (mut h_row, mut fixed) = (Vec::new(), Vec::new());
         let mut red_row = vec![usize::MAX; rows];
@@ -354,22 +364,20 @@ impl Engine {
             }
         }
         let nr = h_row.len();
-        let a = Matrix::from_fn(nr, k, |r, j| hn[(h_row[r], j)] / norms[h_row[r]]);
+        let a = Matrix::from_fn(nr, k, |r, j| hn(h_row[r])[j] / norms[h_row[r]]);
         let nu: Vec<f64> = h_row.iter().map(|&i| norms[i]).collect();
         let c0n: Vec<f64> = h_row.iter().map(|&i| qp.c0[i] / norms[i]).collect();
-        let a_cols = (0..k * nr).map(|x| a[(x % nr, x / nr)]).collect();
-        let mn_cols = (0..6 * nr)
-            .map(|x| mfull[(h_row[x % nr], x / nr)] / norms[h_row[x % nr]])
-            .collect();
+        let a_cols = column_major(nr, k, |r, j| a[(r, j)]);
+        let mn_cols = column_major(nr, 6, |r, j| mfull(h_row[r], j) / norms[h_row[r]]);
         let fixed_c0 = fixed.iter().map(|&i| qp.c0[i]).collect();
-        let fixed_m = Matrix::from_fn(fixed.len(), 6, |r, j| mfull[(fixed[r], j)]);
+        let fixed_m = Matrix::from_fn(fixed.len(), 6, |r, j| mfull(fixed[r], j));
         // A fixed row whose wrench terms are themselves rounding (a contact that neither
         // torque nor wrench loads, as an unactuated joint can leave one) is judged
         // against the rounding of the largest wrench row.
         let fixed_floor = 1e3
             * f64::EPSILON
             * (0..rows)
-                .map(|i| mfull.row(i).iter().map(|v| v.abs()).sum::<f64>())
+                .map(|i| (0..6).map(|j| mfull(i, j).abs()).sum::<f64>())
                 .fold(0.0, f64::max);
         let kp = k + 1;
         let ws = Workspace {
@@ -409,6 +417,14 @@ impl Engine {
             ws,
         })
     }
+}
+
+/// The entries `f(i, j)` of a rows × cols matrix, column after column.
+fn column_major(rows: usize, cols: usize, f: impl Fn(usize, usize) -> f64) -> Vec<f64> {
+    (0..cols)
+        .flat_map(|j| (0..rows).map(move |i| (i, j)))
+        .map(|(i, j)| f(i, j))
+        .collect()
 }
 
 /// What the iteration ended with.

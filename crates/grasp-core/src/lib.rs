@@ -26,7 +26,9 @@ pub use error::{ModelError, ProblemError};
 pub use matrix::Matrix;
 pub use model::{Equilibrium, GraspModel, InternalForces, ModelOptions};
 pub use problem::GraspProblem;
-pub use qp::{ConeRepr, Constraints, ContactBlock, ForceSpaceQp, LeastDistance, RowId, TorqueQp};
+pub use qp::{
+    ConeRepr, Constraints, ContactBlock, ForceSpaceQp, LeastDistance, RowFactors, RowId, TorqueQp,
+};
 pub use solver::{
     solve, solve_into, Capabilities, Diagnostics, Reason, Solution, Status, TorqueSolver,
     WarmStart, WarmStartError,

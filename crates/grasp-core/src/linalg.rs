@@ -327,18 +327,18 @@ fn decompose_qr(a: &Matrix, threshold: RankThreshold) -> Option<Decomposition> {
     let (mut vhead, mut tau) = (vec![0.0; k], vec![0.0; k]);
     householder(&mut w, len, k, &mut vhead, &mut tau);
     let r = |i: usize, j: usize| w[j * len + i];
-    // R⁻¹ (column-major, k × k) by back substitution, column by column.
+    // R⁻¹ (row-major, k × k) by back substitution, column by column.
     let mut rinv = vec![0.0; k * k];
     for j in 0..k {
         for i in (0..=j).rev() {
             let mut s = if i == j { 1.0 } else { 0.0 };
             for l in i + 1..=j {
-                s -= r(i, l) * rinv[j * k + l];
+                s -= r(i, l) * rinv[l * k + j];
             }
             if r(i, i) == 0.0 {
                 return None;
             }
-            rinv[j * k + i] = s / r(i, i);
+            rinv[i * k + j] = s / r(i, i);
         }
     }
     let nr = (0..k)
@@ -356,25 +356,41 @@ fn decompose_qr(a: &Matrix, threshold: RankThreshold) -> Option<Decomposition> {
         }
     }
     let q = explicit_q(&w, len, k, &vhead, &tau);
-    let qm = |i: usize, j: usize| q[j * len + i];
+    // Columns a..b of Q (column-major) as a row-major matrix.
+    let q_cols = |a: usize, b: usize| {
+        let mut data = vec![0.0; len * (b - a)];
+        for (j, col) in q[a * len..b * len].chunks_exact(len).enumerate() {
+            for (i, &x) in col.iter().enumerate() {
+                data[i * (b - a) + j] = x;
+            }
+        }
+        Matrix::from_rows_data(len, b - a, data)
+    };
     Some(if wide {
         // Aᵀ = Q₁ R: A = Rᵀ Q₁ᵀ, so A x = b ⇔ Q₁ᵀ x = R⁻ᵀ b.
         Decomposition {
-            row_basis: Matrix::from_fn(cols, rows, qm),
-            row_transform: Matrix::from_fn(rows, rows, |i, j| rinv[i * k + j]),
-            null_basis: Matrix::from_fn(cols, cols - rows, |i, j| qm(i, rows + j)),
+            row_basis: q_cols(0, rows),
+            row_transform: Matrix::from_fn(rows, rows, |i, j| rinv[j * k + i]),
+            null_basis: q_cols(rows, cols),
             left_null: Matrix::zeros(rows, 0),
         }
     } else {
-        // A = Q₁ R: A x = b ⇔ x = R⁻¹ Q₁ᵀ b (b in the range).
-        let t = Matrix::from_fn(cols, rows, |i, j| {
-            (i..cols).map(|l| rinv[l * k + i] * q[l * len + j]).sum()
-        });
+        // A = Q₁ R: A x = b ⇔ x = R⁻¹ Q₁ᵀ b (b in the range). Row i of R⁻¹ Q₁ᵀ sums
+        // the columns l ≥ i of Q₁, each contiguous.
+        let mut t = vec![0.0; cols * rows];
+        for (i, trow) in t.chunks_exact_mut(rows).enumerate() {
+            for l in i..k {
+                let f = rinv[i * k + l];
+                for (x, y) in trow.iter_mut().zip(&q[l * len..(l + 1) * len]) {
+                    *x += f * y;
+                }
+            }
+        }
         Decomposition {
             row_basis: Matrix::identity(cols),
-            row_transform: t,
+            row_transform: Matrix::from_rows_data(cols, rows, t),
             null_basis: Matrix::zeros(cols, 0),
-            left_null: Matrix::from_fn(rows, rows - cols, |i, j| qm(i, cols + j)),
+            left_null: q_cols(cols, rows),
         }
     })
 }

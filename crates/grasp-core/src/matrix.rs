@@ -28,6 +28,15 @@ impl Matrix {
         Self::from_fn(n, n, |i, j| if i == j { 1.0 } else { 0.0 })
     }
 
+    /// A `rows × cols` matrix from its entries, row by row.
+    ///
+    /// # Panics
+    /// If there are not `rows × cols` entries.
+    pub fn from_rows_data(rows: usize, cols: usize, data: Vec<f64>) -> Self {
+        assert_eq!(data.len(), rows * cols, "entries of a {rows}×{cols} matrix");
+        Self { rows, cols, data }
+    }
+
     /// Builds a matrix entry by entry.
     pub fn from_fn(rows: usize, cols: usize, mut f: impl FnMut(usize, usize) -> f64) -> Self {
         let mut data = Vec::with_capacity(rows * cols);

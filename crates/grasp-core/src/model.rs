@@ -321,7 +321,11 @@ impl GraspModel {
             })
             .collect();
         // R A D⁻¹.
-        let mat = Matrix::from_fn(rows, n, |i, j| a_row(i)[j] * dinv[j] * r[i]);
+        let mut data = Vec::with_capacity(rows * n);
+        for (i, ri) in r.iter().enumerate() {
+            data.extend(a_row(i).iter().zip(&dinv).map(|(a, d)| a * d * ri));
+        }
+        let mat = Matrix::from_rows_data(rows, n, data);
         let dec = decompose(&mat, RankThreshold::Relative(opts.rank_tolerance)).map_err(|_| {
             ModelError::Decomposition {
                 what: "[G; Jᵀ]",
@@ -333,8 +337,16 @@ impl GraspModel {
         let zm = dec.pseudo_inverse();
         // Z = D⁻¹ (R A D⁻¹)⁺ R, split into Z1 (wrench) and Z2 (torque); E's columns
         // multiply its zero target.
-        let z1 = Matrix::from_fn(n, 6, |i, j| dinv[i] * zm[(i, j)] * r[j]);
-        let z2 = Matrix::from_fn(n, m, |i, j| dinv[i] * zm[(i, 6 + k + j)] * r[6 + k + j]);
+        let (mut z1, mut z2) = (Vec::with_capacity(n * 6), Vec::with_capacity(n * m));
+        for (i, d) in dinv.iter().enumerate() {
+            let (zw, zt) = (&zm.row(i)[..6], &zm.row(i)[6 + k..]);
+            z1.extend(zw.iter().zip(&r[..6]).map(|(z, ri)| d * z * ri));
+            z2.extend(zt.iter().zip(&r[6 + k..]).map(|(z, ri)| d * z * ri));
+        }
+        let (z1, z2) = (
+            Matrix::from_rows_data(n, 6, z1),
+            Matrix::from_rows_data(n, m, z2),
+        );
         let passive_basis = Matrix::from_fn(n, n - rank, |i, k| dinv[i] * dec.null_basis[(i, k)]);
         let mut wrench_scale = [1.0; 6];
         wrench_scale.copy_from_slice(&r[..6]);

@@ -158,6 +158,58 @@ pub struct LeastDistance<'a> {
     pub weights: &'a [f64],
     /// Identity of each inequality row.
     pub rows: &'a [RowId],
+    /// How `h` was formed, when it is `S Z2` (see [`RowFactors`]).
+    pub factors: Option<RowFactors<'a>>,
+}
+
+/// `H = S Z2` with S block-diagonal (at most four nonzeros per row), and ±1 in the
+/// torque-limit rows: a product `H X` costs one product through Z2 (n rows) and a few
+/// multiply-adds per row of H, instead of one full row of H per row.
+#[derive(Clone, Copy, Debug)]
+pub struct RowFactors<'a> {
+    /// Z2, n × m.
+    pub z2: &'a Matrix,
+    /// Each contact's rows.
+    pub contacts: &'a [ContactBlock],
+    /// Each contact's cone (its face rows are the blocks of S).
+    pub cones: &'a [ConeRepr],
+}
+
+impl LeastDistance<'_> {
+    /// `H X` for X with one row per variable, through [`RowFactors`] when H has them.
+    pub fn h_mul(&self, x: &Matrix) -> Matrix {
+        let Some(f) = self.factors else {
+            return self.h.matmul(x);
+        };
+        let zx = f.z2.matmul(x);
+        let mut out = Matrix::zeros(self.h.nrows(), x.ncols());
+        for (c, repr) in f.contacts.iter().zip(f.cones) {
+            let dim = c.model.dim();
+            for k in 0..c.rows {
+                let o = out.row_mut(c.first_row + k);
+                for t in 0..dim {
+                    let s = match repr {
+                        ConeRepr::Inscribed(cone) => cone.faces[(k, t)],
+                        ConeRepr::Exact => (t == c.model.normal_index()) as u8 as f64,
+                    };
+                    if s != 0.0 {
+                        for (y, z) in o.iter_mut().zip(zx.row(c.offset + t)) {
+                            *y += s * z;
+                        }
+                    }
+                }
+            }
+        }
+        for (i, id) in self.rows.iter().enumerate() {
+            if let RowId::TorqueLimit { joint, upper } = *id {
+                let sign = if upper { -1.0 } else { 1.0 };
+                for (y, v) in out.row_mut(i).iter_mut().zip(x.row(joint)) {
+                    *y = sign * v;
+                }
+            }
+        }
+        out
+    }
 }
 
 /// The linear rows of a model under some constraints: the view every backend reads.
@@ -384,6 +436,11 @@ impl TorqueQp {
             eq_w: &self.model.eq_w,
             weights: &self.model.weights,
             rows: &self.rows,
+            factors: Some(RowFactors {
+                z2: &self.model.z2,
+                contacts: &self.contacts,
+                cones: &self.constraints.cones,
+            }),
         }
     }
 }
@@ -486,6 +543,7 @@ impl ForceSpaceQp {
             eq_w: &self.eq_w,
             weights: &self.weights,
             rows: &self.rows,
+            factors: None,
         }
     }
 

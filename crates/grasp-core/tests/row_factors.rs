@@ -1,0 +1,77 @@
+//! `H X` through the row factors (`S (Z2 X)`, ±X on limit rows) equals the product
+//! with the assembled H, to the rounding of the sums, on every bundled grasp, with
+//! inscribed and exact cones and torque limits.
+
+use grasp_core::{ConeRepr, Matrix, ModelOptions, TorqueQp};
+use grasp_io::load_problem;
+
+#[test]
+fn factored_products_match_the_assembled_rows() {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
+    let mut files: Vec<_> = ["", "/hands"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(format!("{root}{d}")).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 9, "{files:?}");
+    let mut limited = 0;
+    for path in &files {
+        let mut p = load_problem(path).unwrap();
+        let m = p.jacobian_transpose.nrows();
+        // Torque limits on every other joint, so limit rows are covered everywhere.
+        let t = p.transmission.as_ref().map_or(m, |t| t.matrix.ncols());
+        p.torque_limits = Some((0..t).map(|j| (j % 2 == 0).then_some(5.0)).collect());
+        let model =
+            std::sync::Arc::new(grasp_core::GraspModel::new(&p, &ModelOptions::default()).unwrap());
+        for qp in [
+            TorqueQp::linearized(model.clone(), &p.linearization),
+            TorqueQp::exact(model.clone()),
+        ] {
+            let ld = qp.least_distance();
+            assert!(ld.factors.is_some());
+            let k = qp.joints();
+            let x = Matrix::from_fn(k, 7, |i, j| ((3 * i + 5 * j) % 11) as f64 / 7.0 - 0.6);
+            let fast = ld.h_mul(&x);
+            let plain = qp.h.matmul(&x);
+            // Both sum the products s_t z_tl x_lj, in another order: each entry to within
+            // the rounding of a sum of m + 4 terms, relative to Σ |s_t| |z_tl| |x_lj|.
+            let abs = |a: &Matrix| Matrix::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)].abs());
+            let zx = abs(&model.z2).matmul(&abs(&x));
+            // Limit rows: ±x exactly.
+            let mut size = Matrix::from_fn(plain.nrows(), 7, |i, j| match qp.rows[i] {
+                grasp_core::RowId::TorqueLimit { joint, .. } => x[(joint, j)].abs(),
+                _ => 0.0,
+            });
+            for (c, repr) in qp.contacts.iter().zip(&qp.constraints.cones) {
+                for r in 0..c.rows {
+                    for t in 0..c.model.dim() {
+                        let s = match repr {
+                            ConeRepr::Inscribed(cone) => cone.faces[(r, t)].abs(),
+                            // Exact: the unit normal row (ConeRepr is non-exhaustive).
+                            _ => (t == c.model.normal_index()) as u8 as f64,
+                        };
+                        for j in 0..7 {
+                            size[(c.first_row + r, j)] += s * zx[(c.offset + t, j)];
+                        }
+                    }
+                }
+            }
+            let gamma = 2.0 * (k + 4) as f64 * f64::EPSILON;
+            for i in 0..plain.nrows() {
+                for j in 0..plain.ncols() {
+                    let d = (fast[(i, j)] - plain[(i, j)]).abs();
+                    let bound = gamma * size[(i, j)];
+                    assert!(d <= bound, "{path:?} row {i} col {j}: {d:e} > {bound:e}");
+                }
+            }
+            limited += qp
+                .rows
+                .iter()
+                .filter(|r| matches!(r, grasp_core::RowId::TorqueLimit { .. }))
+                .count();
+        }
+    }
+    assert!(limited > 0);
+}
