@@ -43,3 +43,30 @@ pub(crate) fn backward(l: &[f64], n: usize, b: &mut [f64]) {
         }
     }
 }
+
+/// The Schur complement of `rows` constraint rows `c` (row-major, each of length n)
+/// against the Cholesky factor `l` of an n × n matrix M: `Y = L⁻¹ Cᵀ` into `y_cols`
+/// (column r at `r·n..`), then `S = YᵀY = C M⁻¹ Cᵀ` factored in place in
+/// `s[..rows²]`. False if S is not positive definite (dependent rows).
+pub(crate) fn schur(
+    l: &[f64],
+    n: usize,
+    c: &[f64],
+    rows: usize,
+    y_cols: &mut [f64],
+    s: &mut [f64],
+) -> bool {
+    for r in 0..rows {
+        let col = &mut y_cols[r * n..r * n + n];
+        col.copy_from_slice(&c[r * n..r * n + n]);
+        forward(l, n, col);
+    }
+    for r in 0..rows {
+        for q in 0..=r {
+            let v = dot4(&y_cols[r * n..r * n + n], &y_cols[q * n..q * n + n]);
+            s[r * rows + q] = v;
+            s[q * rows + r] = v;
+        }
+    }
+    rows == 0 || cholesky(&mut s[..rows * rows], rows)
+}

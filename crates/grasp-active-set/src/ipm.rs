@@ -13,7 +13,7 @@
 //! does not end with a certificate; infeasibility is decided before it runs (the
 //! inscribed and circumscribed polyhedra), so it has no homogeneous embedding.
 
-use crate::dense::{backward, cholesky, forward};
+use crate::dense::{backward, cholesky, forward, schur};
 use grasp_core::matrix::{dot, norm2, norm_inf};
 use grasp_core::{ConeKind, ConicForm, Matrix};
 
@@ -622,19 +622,7 @@ impl Ipm {
         }
         // Schur complement S = E M⁻¹ Eᵀ = YᵀY with Y = L⁻¹ Eᵀ.
         let p = self.e.nrows();
-        for i in 0..p {
-            let col = &mut ws.y_cols[i * n..i * n + n];
-            col.copy_from_slice(self.e.row(i));
-            forward(&ws.m, n, col);
-        }
-        for i in 0..p {
-            for k in 0..=i {
-                let v = dot(&ws.y_cols[i * n..i * n + n], &ws.y_cols[k * n..k * n + n]);
-                ws.schur[i * p + k] = v;
-                ws.schur[k * p + i] = v;
-            }
-        }
-        p == 0 || cholesky(&mut ws.schur, p)
+        schur(&ws.m, n, self.e.as_slice(), p, &mut ws.y_cols, &mut ws.schur)
     }
 
     /// The search direction for the current residuals and `d_s` in `t1`:

@@ -25,7 +25,7 @@
 //! iterations on it, through the KKT matrix's explicit inverse, built once per
 //! factorisation: a control loop pays O((k + nc)²) per iteration.
 
-use crate::dense::{backward, cholesky, dot4, forward};
+use crate::dense::{backward, cholesky, dot4, forward, schur};
 use grasp_core::conic::soc_excess;
 use grasp_core::linalg::{decompose, RankThreshold};
 use grasp_core::matrix::norm_inf;
@@ -686,19 +686,7 @@ impl Newton {
                 return Step::Failed;
             }
             // Y = L⁻¹ Cᵀ, S = YᵀY, t = L⁻¹(−P x).
-            for r in 0..nc {
-                let col = &mut self.ycols[r * n..r * n + n];
-                col.copy_from_slice(&self.c[r * n..r * n + n]);
-                forward(&self.h, n, col);
-            }
-            for r in 0..nc {
-                for q in 0..=r {
-                    let v = dot4(&self.ycols[r * n..r * n + n], &self.ycols[q * n..q * n + n]);
-                    self.schur[r * nc + q] = v;
-                    self.schur[q * nc + r] = v;
-                }
-            }
-            if nc > 0 && !cholesky(&mut self.schur[..nc * nc], nc) {
+            if !schur(&self.h, n, &self.c, nc, &mut self.ycols, &mut self.schur) {
                 // Dependent constraints: the guess is degenerate.
                 return Step::Failed;
             }

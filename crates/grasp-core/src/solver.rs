@@ -636,24 +636,19 @@ impl TorqueQp {
             let dim = c.model.dim();
             let fc = &f[c.offset..c.offset + dim];
             let c0 = &self.c0[c.first_row..c.first_row + c.rows];
-            let bad = match repr {
-                ConeRepr::Inscribed(cone) => {
-                    let faces = cone.faces.as_slice();
-                    match dim {
-                        1 => cone_rows::<1>(faces, fc, c0, tol, fscale, &mut viol),
-                        3 => cone_rows::<3>(faces, fc, c0, tol, fscale, &mut viol),
-                        _ => cone_rows::<4>(faces, fc, c0, tol, fscale, &mut viol),
-                    }
-                }
+            // The exact cone's only linear row is its unit normal (fz ≥ f_min).
+            let mut unit = [0.0; 4];
+            let faces = match repr {
+                ConeRepr::Inscribed(cone) => cone.faces.as_slice(),
                 ConeRepr::Exact => {
-                    let mut unit = [0.0; 4];
                     unit[c.model.normal_index()] = 1.0;
-                    match dim {
-                        1 => cone_rows::<1>(&unit[..1], fc, c0, tol, fscale, &mut viol),
-                        3 => cone_rows::<3>(&unit[..3], fc, c0, tol, fscale, &mut viol),
-                        _ => cone_rows::<4>(&unit, fc, c0, tol, fscale, &mut viol),
-                    }
+                    &unit[..dim]
                 }
+            };
+            let bad = match dim {
+                1 => cone_rows::<1>(faces, fc, c0, tol, fscale, &mut viol),
+                3 => cone_rows::<3>(faces, fc, c0, tol, fscale, &mut viol),
+                _ => cone_rows::<4>(faces, fc, c0, tol, fscale, &mut viol),
             };
             vbad |= bad;
         }
