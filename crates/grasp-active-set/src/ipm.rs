@@ -622,7 +622,14 @@ impl Ipm {
         }
         // Schur complement S = E M⁻¹ Eᵀ = YᵀY with Y = L⁻¹ Eᵀ.
         let p = self.e.nrows();
-        schur(&ws.m, n, self.e.as_slice(), p, &mut ws.y_cols, &mut ws.schur)
+        schur(
+            &ws.m,
+            n,
+            self.e.as_slice(),
+            p,
+            &mut ws.y_cols,
+            &mut ws.schur,
+        )
     }
 
     /// The search direction for the current residuals and `d_s` in `t1`:
