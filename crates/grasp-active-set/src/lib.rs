@@ -24,7 +24,7 @@
 //! Zero-length steps switch to Bland's rule, which rules out cycling.
 
 use grasp_core::linalg::{decompose, RankThreshold};
-use grasp_core::matrix::{dot, norm_inf};
+use grasp_core::matrix::{add_columns, column_major, dot, norm_inf};
 use grasp_core::{
     Capabilities, ForceSpaceQp, LeastDistance, Matrix, Reason, RowId, Solution, Status, TorqueQp,
     TorqueSolver, WarmStart,
@@ -419,14 +419,6 @@ impl Engine {
     }
 }
 
-/// The entries `f(i, j)` of a rows × cols matrix, column after column.
-fn column_major(rows: usize, cols: usize, f: impl Fn(usize, usize) -> f64) -> Vec<f64> {
-    (0..cols)
-        .flat_map(|j| (0..rows).map(move |i| (i, j)))
-        .map(|(i, j)| f(i, j))
-        .collect()
-}
-
 /// What the iteration ended with.
 enum End {
     Optimal,
@@ -566,34 +558,6 @@ impl Engine {
                 });
                 out.active_set = None;
             }
-        }
-    }
-}
-
-/// `out += sign · M x` for a column-major M (`out.len()` rows, one column per entry
-/// of x), four columns per pass over `out`.
-#[inline]
-pub(crate) fn add_columns(out: &mut [f64], cols: &[f64], x: &[f64], sign: f64) {
-    let n = out.len();
-    if n == 0 {
-        return;
-    }
-    let mut cs = cols.chunks_exact(n);
-    let mut xs = x.chunks_exact(4);
-    for xb in &mut xs {
-        let (x0, x1, x2, x3) = (sign * xb[0], sign * xb[1], sign * xb[2], sign * xb[3]);
-        let (Some(c0), Some(c1), Some(c2), Some(c3)) = (cs.next(), cs.next(), cs.next(), cs.next())
-        else {
-            return;
-        };
-        for ((((o, a), b), c), d) in out.iter_mut().zip(c0).zip(c1).zip(c2).zip(c3) {
-            *o += (x0 * a + x1 * b) + (x2 * c + x3 * d);
-        }
-    }
-    for (col, xj) in cs.zip(xs.remainder()) {
-        let xj = sign * xj;
-        for (o, c) in out.iter_mut().zip(col) {
-            *o += xj * c;
         }
     }
 }

@@ -429,7 +429,7 @@ impl Newton {
     fn slacks(&mut self) {
         let eq = self.eq;
         self.s[eq..].copy_from_slice(&self.b_red[eq..]);
-        crate::add_columns(&mut self.s[eq..], &self.a_red_cols, &self.y, -1.0);
+        grasp_core::matrix::add_columns(&mut self.s[eq..], &self.a_red_cols, &self.y, -1.0);
     }
 
     /// The conic dual of the current multipliers.

@@ -239,6 +239,83 @@ fn sum4(a: &[f64], b: &[f64], term: impl Fn(f64, f64) -> f64) -> f64 {
     (s[0] + s[1]) + (s[2] + s[3]) + tail
 }
 
+/// `out += sign · M x` for a column-major M (`out.len()` rows, one column per entry
+/// of x), four columns per pass over `out`: at these sizes a pass down columns
+/// vectorises where a short dot product per row does not.
+#[inline]
+pub fn add_columns(out: &mut [f64], cols: &[f64], x: &[f64], sign: f64) {
+    let n = out.len();
+    if n == 0 {
+        return;
+    }
+    let mut cs = cols.chunks_exact(n);
+    let mut xs = x.chunks_exact(4);
+    for xb in &mut xs {
+        let (x0, x1, x2, x3) = (sign * xb[0], sign * xb[1], sign * xb[2], sign * xb[3]);
+        let (Some(c0), Some(c1), Some(c2), Some(c3)) = (cs.next(), cs.next(), cs.next(), cs.next())
+        else {
+            return;
+        };
+        for ((((o, a), b), c), d) in out.iter_mut().zip(c0).zip(c1).zip(c2).zip(c3) {
+            *o += (x0 * a + x1 * b) + (x2 * c + x3 * d);
+        }
+    }
+    for (col, xj) in cs.zip(xs.remainder()) {
+        let xj = sign * xj;
+        for (o, c) in out.iter_mut().zip(col) {
+            *o += xj * c;
+        }
+    }
+}
+
+/// [`add_columns`] for rows `first..first + out.len()` of a column-major M whose
+/// columns are `rows` long: a block of a tall M without a buffer as long as it.
+#[inline]
+pub fn add_column_block(
+    out: &mut [f64],
+    cols: &[f64],
+    rows: usize,
+    first: usize,
+    x: &[f64],
+    sign: f64,
+) {
+    let n = out.len();
+    if n == 0 {
+        return;
+    }
+    let col = |j: usize| &cols[j * rows + first..j * rows + first + n];
+    let quads = x.len() / 4;
+    for q in 0..quads {
+        let j = 4 * q;
+        let (x0, x1, x2, x3) = (
+            sign * x[j],
+            sign * x[j + 1],
+            sign * x[j + 2],
+            sign * x[j + 3],
+        );
+        let (c0, c1, c2, c3) = (col(j), col(j + 1), col(j + 2), col(j + 3));
+        for ((((o, a), b), c), d) in out.iter_mut().zip(c0).zip(c1).zip(c2).zip(c3) {
+            *o += (x0 * a + x1 * b) + (x2 * c + x3 * d);
+        }
+    }
+    for j in 4 * quads..x.len() {
+        let xj = sign * x[j];
+        for (o, c) in out.iter_mut().zip(col(j)) {
+            *o += xj * c;
+        }
+    }
+}
+
+/// The entries `f(i, j)` of a rows × cols matrix, column after column (the layout of
+/// [`add_columns`]).
+pub fn column_major(rows: usize, cols: usize, f: impl Fn(usize, usize) -> f64) -> Vec<f64> {
+    let mut out = Vec::with_capacity(rows * cols);
+    for j in 0..cols {
+        out.extend((0..rows).map(|i| f(i, j)));
+    }
+    out
+}
+
 /// Infinity norm of a slice (0 when empty).
 #[inline]
 pub fn norm_inf(a: &[f64]) -> f64 {

@@ -24,7 +24,7 @@
 use crate::contact::ContactModel;
 use crate::error::ModelError;
 use crate::linalg::{decompose, RankThreshold};
-use crate::matrix::{dot, norm_inf, Matrix};
+use crate::matrix::{add_columns, column_major, dot, norm_inf, Matrix};
 use crate::problem::GraspProblem;
 use serde::{Deserialize, Serialize};
 
@@ -165,6 +165,14 @@ pub struct GraspModel {
     /// Per row of `[G; E; Jᵀ]`, `Σ_j |a_ij| · force_unit_j`: how strongly a unit force
     /// (mz counted as mz/mu_torsion) reaches the row, for the residual check's scale.
     pub row_reach: Vec<f64>,
+    /// The row equilibration of `[G; E; Jᵀ]`: [`Self::wrench_scale`], then
+    /// [`Self::unactuated_scale`] and [`Self::torque_scale`].
+    pub row_scale: Vec<f64>,
+    /// `[G; E; Jᵀ]` column-major (force component j at `j · (6 + k + m)..`): the
+    /// residual check forms `A f` in passes down columns.
+    pub stacked_cols: Vec<f64>,
+    /// `[C | eq_w]` column-major (p rows, m + 6 columns), for `C τ − e(w)` likewise.
+    pub eq_cols: Vec<f64>,
 }
 
 /// The joint space of a model whose torques are actuator forces: `τ = T u`.
@@ -178,6 +186,13 @@ pub struct ActuatorSpace {
     pub joint_names: Vec<String>,
     /// Q₂ᵀ, k × m: orthonormal joint-torque directions outside the range of T.
     pub unactuated_directions: Matrix,
+    /// Jᵀ in joint space, column-major (m rows), for the residual check.
+    pub joint_jacobian_cols: Vec<f64>,
+    /// T column-major (m rows), then `|T|` likewise: `τ = T u` and the size of its
+    /// terms `|T| |u|`, for the residual check.
+    pub transmission_cols: Vec<f64>,
+    /// Per joint, `Σ_j |Jᵀ_ij| · force_unit_j` (as [`GraspModel::row_reach`]).
+    pub joint_reach: Vec<f64>,
 }
 
 impl ActuatorSpace {
@@ -188,7 +203,8 @@ impl ActuatorSpace {
 
     /// `τ = T u` into `out` (length m).
     pub fn joint_torques_into(&self, u: &[f64], out: &mut [f64]) {
-        self.transmission.mul_vec_into(u, out);
+        out.fill(0.0);
+        add_columns(out, &self.transmission_cols, u, 1.0);
     }
 
     /// The unactuated directions as joint combinations, for messages:
@@ -254,9 +270,20 @@ fn actuator_space(
         unactuated,
         Some(ActuatorSpace {
             transmission: tm.clone(),
+            joint_jacobian_cols: column_major(m, n, |i, j| p.jacobian_transpose[(i, j)]),
+            transmission_cols: column_major(m, 2 * a, |i, j| {
+                let v = tm[(i, j % a)];
+                if j < a {
+                    v
+                } else {
+                    v.abs()
+                }
+            }),
             joint_jacobian_transpose: p.jacobian_transpose.clone(),
             joint_names: p.joint_names.clone(),
             unactuated_directions: q2t,
+            // Filled by the model, which knows the force units.
+            joint_reach: Vec::new(),
         }),
     ))
 }
@@ -268,7 +295,7 @@ impl GraspModel {
             return Err(ModelError::RankTolerance(opts.rank_tolerance));
         }
         let n = p.force_dim();
-        let (jt, unactuated, actuators) = actuator_space(p, opts.rank_tolerance)?;
+        let (jt, unactuated, mut actuators) = actuator_space(p, opts.rank_tolerance)?;
         let (k, m) = (unactuated.nrows(), jt.nrows());
         // Row i of A = [G; E; Jᵀ] (E: the unactuated directions, target 0), without
         // stacking a copy.
@@ -399,15 +426,26 @@ impl GraspModel {
             (Some(_), _) => (0..m).map(|j| format!("actuator {j}")).collect(),
             _ => p.joint_names.clone(),
         };
-        let row_reach = (0..rows)
-            .map(|i| {
-                a_row(i)
-                    .iter()
-                    .zip(&force_unit)
-                    .map(|(x, u)| (x * u).abs())
-                    .sum()
-            })
-            .collect();
+        let reach = |row: &[f64]| -> f64 {
+            row.iter()
+                .zip(&force_unit)
+                .map(|(x, u)| (x * u).abs())
+                .sum()
+        };
+        let row_reach = (0..rows).map(|i| reach(a_row(i))).collect();
+        if let Some(a) = &mut actuators {
+            let jt = &a.joint_jacobian_transpose;
+            a.joint_reach = (0..jt.nrows()).map(|i| reach(jt.row(i))).collect();
+        }
+        let stacked_cols = column_major(rows, n, |i, j| a_row(i)[j]);
+        let p_eq = eq.nrows();
+        let eq_cols = column_major(p_eq, m + 6, |i, j| {
+            if j < m {
+                eq[(i, j)]
+            } else {
+                eq_w[(i, j - m)]
+            }
+        });
         Ok(Self {
             grasp_matrix: p.grasp_matrix.clone(),
             contacts: p.contacts.clone(),
@@ -429,7 +467,10 @@ impl GraspModel {
             wrench_scale,
             unactuated_scale: r[6..6 + k].to_vec(),
             torque_scale: r[6 + k..].to_vec(),
+            row_scale: r,
             row_reach,
+            stacked_cols,
+            eq_cols,
             jacobian_transpose: jt,
             unactuated,
             actuators,
@@ -451,6 +492,16 @@ impl GraspModel {
     /// Index of torque row j in the rows of `[G; E; Jᵀ]` (for [`Self::row_reach`]).
     pub fn torque_row(&self, j: usize) -> usize {
         6 + self.unactuated.nrows() + j
+    }
+
+    /// Row i of `[G; E; Jᵀ]` (the order of [`Self::row_reach`] and [`Self::row_scale`]).
+    pub fn stacked_row(&self, i: usize) -> &[f64] {
+        let k = self.unactuated.nrows();
+        match i {
+            0..6 => self.grasp_matrix.row(i),
+            _ if i < 6 + k => self.unactuated.row(i - 6),
+            _ => self.jacobian_transpose.row(i - 6 - k),
+        }
     }
 
     /// Number of consistency equalities p.

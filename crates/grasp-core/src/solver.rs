@@ -5,7 +5,7 @@
 //! a backend calls optimal whose residuals exceed the backend's stated accuracy,
 //! relative to the problem's own scale, is reported as a numerical failure instead.
 
-use crate::matrix::{abs_dot4, dot, norm_inf};
+use crate::matrix::{add_column_block, norm_inf};
 use crate::model::Equilibrium;
 use crate::qp::{ConeRepr, RowId, TorqueQp};
 use serde::{Serialize, Serializer};
@@ -181,6 +181,9 @@ pub struct Diagnostics {
     /// The same for `Jᵀ f = τ`.
     pub torque_check: f64,
 }
+
+/// Rows of the residual check formed at a time, on the stack.
+const CHECK_BLOCK: usize = 16;
 
 /// The largest `r / bound` of a check's rows (r > 0), kept as a fraction: one division
 /// at the end instead of one per row.
@@ -544,51 +547,42 @@ impl TorqueQp {
             .fold(0.0f64, |a, (v, u)| a.max((v * u).abs()));
         let admitted = 10.0 * model.rank_tolerance * norm_inf(&model.scaled_wrench(w));
         let rounding = 1e3 * f64::EPSILON * (6 + model.joints() + model.passive_dim()) as f64;
+        // The rows of A = [G; E; Jᵀ] against their targets [w; 0; τ], a block of rows at
+        // a time down the columns of A (no buffer as long as A).
         let (mut wres, mut wbad, mut wratio) = (0.0f64, false, WorstRatio::NONE);
-        for i in 0..6 {
-            let row = model.grasp_matrix.row(i);
-            let r = (dot(row, f) - w[i]).abs();
-            wres = wres.max(r);
-            // In equilibrated units (× wrench_scale_i), which saves a division.
-            let ri = model.wrench_scale[i];
-            let mut bound = tol * (w[i].abs() + model.row_reach[i] * fmax) * ri + admitted;
-            if exceeds(r * ri, bound) {
-                bound += rounding * model.force_terms_dot(row, w, tau, &out.internal_forces) * ri;
-                wbad |= exceeds(r * ri, bound);
-            }
-            if r > 0.0 {
-                wratio.add(r * ri, bound);
-            }
-        }
         let (mut tres, mut tbad, mut tratio) = (0.0f64, false, WorstRatio::NONE);
-        for (j, t) in tau.iter().enumerate() {
-            let row = model.jacobian_transpose.row(j);
-            let r = (dot(row, f) - t).abs();
-            tres = tres.max(r);
-            let rj = model.torque_scale[j];
-            let mut bound =
-                tol * (t.abs() + model.row_reach[model.torque_row(j)] * fmax) * rj + admitted;
-            if exceeds(r * rj, bound) {
-                bound += rounding * model.force_terms_dot(row, w, tau, &out.internal_forces) * rj;
-                tbad |= exceeds(r * rj, bound);
-            }
-            if r > 0.0 {
-                tratio.add(r * rj, bound);
-            }
-        }
-        // E f = 0: the joint torques stay in the range of the transmission.
-        for i in 0..model.unactuated.nrows() {
-            let row = model.unactuated.row(i);
-            let r = dot(row, f).abs();
-            tres = tres.max(r);
-            let ri = model.unactuated_scale[i];
-            let mut bound = tol * model.row_reach[6 + i] * fmax * ri + admitted;
-            if exceeds(r * ri, bound) {
-                bound += rounding * model.force_terms_dot(row, w, tau, &out.internal_forces) * ri;
-                tbad |= exceeds(r * ri, bound);
-            }
-            if r > 0.0 {
-                tratio.add(r * ri, bound);
+        let (k, rows) = (model.unactuated.nrows(), model.row_scale.len());
+        let mut buf = [0.0f64; CHECK_BLOCK];
+        for first in (0..rows).step_by(CHECK_BLOCK) {
+            let af = &mut buf[..CHECK_BLOCK.min(rows - first)];
+            af.fill(0.0);
+            add_column_block(af, &model.stacked_cols, rows, first, f, 1.0);
+            for (i, &ai) in (first..).zip(af.iter()) {
+                let target = match i {
+                    0..6 => w[i],
+                    _ if i < 6 + k => 0.0,
+                    _ => tau[i - 6 - k],
+                };
+                let r = (ai - target).abs();
+                let ri = model.row_scale[i];
+                // In equilibrated units (× row_scale_i), which saves a division.
+                let mut bound = tol * (target.abs() + model.row_reach[i] * fmax) * ri + admitted;
+                let bad = exceeds(r * ri, bound) && {
+                    let row = model.stacked_row(i);
+                    bound +=
+                        rounding * model.force_terms_dot(row, w, tau, &out.internal_forces) * ri;
+                    exceeds(r * ri, bound)
+                };
+                let (res, worst, ratio) = if i < 6 {
+                    (&mut wres, &mut wbad, &mut wratio)
+                } else {
+                    (&mut tres, &mut tbad, &mut tratio)
+                };
+                *res = res.max(r);
+                *worst |= bad;
+                if r > 0.0 {
+                    ratio.add(r * ri, bound);
+                }
             }
         }
         match &model.actuators {
@@ -597,16 +591,34 @@ impl TorqueQp {
                 a.joint_torques_into(tau, &mut out.joint_torque);
                 // The user's equation, in joint space: Jᵀ f = T u, each row against its
                 // own terms (the rows above are its image under T⁺ and Q₂ᵀ).
-                for (i, t) in out.joint_torque.iter().enumerate() {
-                    let row = a.joint_jacobian_transpose.row(i);
-                    let size = abs_dot4(row, &model.force_unit) * fmax
-                        + abs_dot4(a.transmission.row(i), tau);
-                    let r = (dot(row, f) - t).abs();
-                    tres = tres.max(r);
-                    let bound = (tol + rounding) * size;
-                    tbad |= exceeds(r, bound);
-                    if r > 0.0 {
-                        tratio.add(r, bound.max(f64::MIN_POSITIVE));
+                let (mj, na) = (a.joints(), tau.len());
+                let abs_t = &a.transmission_cols[mj * na..];
+                let (mut terms, mut abs_u) = ([0.0f64; CHECK_BLOCK], [0.0f64; CHECK_BLOCK]);
+                for first in (0..mj).step_by(CHECK_BLOCK) {
+                    let len = CHECK_BLOCK.min(mj - first);
+                    let jf = &mut buf[..len];
+                    jf.fill(0.0);
+                    add_column_block(jf, &a.joint_jacobian_cols, mj, first, f, 1.0);
+                    // |T| |u|, a block of actuators at a time.
+                    let terms = &mut terms[..len];
+                    terms.fill(0.0);
+                    for c in (0..na).step_by(CHECK_BLOCK) {
+                        let u = &mut abs_u[..CHECK_BLOCK.min(na - c)];
+                        for (x, t) in u.iter_mut().zip(&tau[c..]) {
+                            *x = t.abs();
+                        }
+                        add_column_block(terms, &abs_t[c * mj..], mj, first, u, 1.0);
+                    }
+                    for ((i, &ji), &tu) in (first..).zip(jf.iter()).zip(terms.iter()) {
+                        let t = out.joint_torque[i];
+                        let size = a.joint_reach[i] * fmax + tu;
+                        let r = (ji - t).abs();
+                        tres = tres.max(r);
+                        let bound = (tol + rounding) * size;
+                        tbad |= exceeds(r, bound);
+                        if r > 0.0 {
+                            tratio.add(r, bound.max(f64::MIN_POSITIVE));
+                        }
                     }
                 }
             }
@@ -616,9 +628,17 @@ impl TorqueQp {
         d.torque_residual = tres;
         d.wrench_check = wratio.value();
         d.torque_check = tratio.value();
-        d.consistency_residual = (0..model.equality_rows())
-            .map(|i| (dot(model.eq.row(i), tau) + dot(model.eq_w.row(i), w)).abs())
-            .fold(0.0, f64::max);
+        // C τ − e(w) = [C | eq_w] [τ; w], likewise by blocks.
+        let (p, m) = (model.equality_rows(), model.joints());
+        let mut consistency = 0.0f64;
+        for first in (0..p).step_by(CHECK_BLOCK) {
+            let ce = &mut buf[..CHECK_BLOCK.min(p - first)];
+            ce.fill(0.0);
+            add_column_block(ce, &model.eq_cols, p, first, tau, 1.0);
+            add_column_block(ce, &model.eq_cols[m * p..], p, first, w, 1.0);
+            consistency = ce.iter().fold(consistency, |a, v| a.max(v.abs()));
+        }
+        d.consistency_residual = consistency;
         // Force scale: the largest contact force, with mz measured as mz/mu_torsion.
         // Each contact's gauge g(f), once (kept in the margins' buffer until the margins
         // replace it below).
