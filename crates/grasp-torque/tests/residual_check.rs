@@ -1,0 +1,118 @@
+//! The core's residual check against a plain recomputation: on every bundled grasp
+//! (the Shadow tripod with its transmission among them), the reported residuals equal
+//! `‖G f − w‖∞`, `‖[E; Jᵀ] f − [0; τ]‖∞` with the joint-space `‖Jᵀ f − T u‖∞`, and
+//! `‖C τ − e‖∞`, each formed here row by row from the model's matrices; and an answer
+//! moved off its optimum along one joint is no longer called optimal.
+#![cfg(feature = "active-set")]
+
+use grasp_torque::{GraspSolver, Matrix, Solution, SolverConfig, Status, WarmStart};
+
+fn fixtures() -> Vec<std::path::PathBuf> {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
+    let mut out: Vec<_> = ["", "/hands", "/table1", "/geometry"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(format!("{root}{d}")).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    out.sort();
+    out
+}
+
+/// `max_i |M_i x − t_i|` and the largest `Σ_j |M_ij x_j| + |t_i|` (the sums' size).
+fn residual(m: &Matrix, x: &[f64], t: &[f64]) -> (f64, f64) {
+    (0..m.nrows()).fold((0.0f64, 0.0f64), |(r, s), i| {
+        let row = m.row(i);
+        let v: f64 = row.iter().zip(x).map(|(a, b)| a * b).sum();
+        let size: f64 = row.iter().zip(x).map(|(a, b)| (a * b).abs()).sum();
+        let ti = t.get(i).copied().unwrap_or(0.0);
+        (r.max((v - ti).abs()), s.max(size + ti.abs()))
+    })
+}
+
+/// The residuals of `s` recomputed from the model, each with the size of its terms.
+fn check_against_plain(s: &Solution, solver: &GraspSolver, w: &[f64; 6], label: &str) {
+    let model = &solver.problem().model;
+    let (f, tau) = (&s.contact_forces, &s.torque);
+    let d = &s.diagnostics;
+    let eps = 64.0 * f64::EPSILON * (f.len() + tau.len() + 6) as f64;
+    let (wr, ws) = residual(&model.grasp_matrix, f, w);
+    let (tr, ts) = residual(&model.jacobian_transpose, f, tau);
+    let (er, es) = residual(&model.unactuated, f, &[]);
+    let (mut tr, mut ts) = (tr.max(er), ts.max(es));
+    if let Some(a) = &model.actuators {
+        let joint = a.transmission.mul_vec(tau);
+        let (jr, js) = residual(&a.joint_jacobian_transpose, f, &joint);
+        let (_, us) = residual(&a.transmission, tau, &[]);
+        tr = tr.max(jr);
+        ts = ts.max(js + us);
+    }
+    let e: Vec<f64> = (0..model.equality_rows())
+        .map(|i| {
+            -model
+                .eq_w
+                .row(i)
+                .iter()
+                .zip(w)
+                .map(|(a, b)| a * b)
+                .sum::<f64>()
+        })
+        .collect();
+    let (cr, cs) = residual(&model.eq, tau, &e);
+    for (name, got, want, size) in [
+        ("wrench", d.wrench_residual, wr, ws),
+        ("torque", d.torque_residual, tr, ts),
+        ("consistency", d.consistency_residual, cr, cs),
+    ] {
+        assert!(
+            (got - want).abs() <= eps * size.max(f64::MIN_POSITIVE),
+            "{label}: {name} residual {got:e}, recomputed {want:e} (terms {size:e})"
+        );
+    }
+}
+
+#[test]
+fn residuals_match_a_plain_recomputation_and_a_moved_answer_fails() {
+    let files = fixtures();
+    assert!(files.len() >= 15, "{files:?}");
+    let mut failed = 0;
+    for path in &files {
+        let p = grasp_torque::load_problem(path).unwrap();
+        let label = path.display().to_string();
+        let mut solver = GraspSolver::new(&p, &SolverConfig::default()).unwrap();
+        let s = solver
+            .solve(&p.wrench, &WarmStart::default())
+            .unwrap()
+            .clone();
+        // Every bundled grasp is feasible: a check that refused an optimum is wrong too.
+        assert_eq!(s.status, Status::Optimal, "{label}: {:?}", s.reason);
+        check_against_plain(&s, &solver, &p.wrench, &label);
+        // Moved along the joint with the largest torque, by a tenth of it: the forces
+        // follow from τ, so a row the optimum holds (a cone face, an equality, the
+        // wrench through C τ = e) must now fail.
+        let j = (0..s.torque.len())
+            .max_by(|&a, &b| s.torque[a].abs().total_cmp(&s.torque[b].abs()))
+            .unwrap();
+        let mut moved = s.clone();
+        moved.status = Status::Optimal;
+        moved.torque[j] += 0.1 * s.torque[j].abs().max(1e-3);
+        let qp = solver.problem();
+        qp.complete(&p.wrench, 1e-9, "test", &mut moved);
+        check_against_plain(&moved, &solver, &p.wrench, &label);
+        // Where the move breaks C τ = e far beyond any tolerance (relative to the terms
+        // of the equalities), the wrench is no longer balanced: the answer must fail.
+        let d = &moved.diagnostics;
+        let model = &qp.model;
+        let size = (0..model.equality_rows())
+            .map(|i| {
+                let r = model.eq.row(i).iter().zip(&moved.torque);
+                r.map(|(a, b)| (a * b).abs()).sum::<f64>()
+            })
+            .fold(0.0, f64::max);
+        if d.consistency_residual > 1e-6 * size {
+            assert_eq!(moved.status, Status::NumericalFailure, "{label}: {d:?}");
+            failed += 1;
+        }
+    }
+    assert!(failed >= 5, "only {failed} moved answers checked");
+}
