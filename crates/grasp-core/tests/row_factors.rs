@@ -7,14 +7,7 @@ use grasp_io::load_problem;
 
 #[test]
 fn factored_products_match_the_assembled_rows() {
-    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
-    let mut files: Vec<_> = ["", "/hands"]
-        .iter()
-        .flat_map(|d| std::fs::read_dir(format!("{root}{d}")).unwrap())
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "json"))
-        .collect();
-    files.sort();
+    let files = grasp_testkit::fixture_paths(&["", "hands"]);
     assert!(files.len() >= 9, "{files:?}");
     let mut limited = 0;
     for path in &files {

@@ -172,6 +172,24 @@ pub fn synthetic_grasp(seed: u64, spec: &SynthSpec) -> GeometryFile {
     }
 }
 
+/// The JSON files of the bundled fixtures in each of `dirs` (relative to `fixtures/`,
+/// `""` for the top level), sorted by name within each folder, folders in the order
+/// given.
+pub fn fixture_paths(dirs: &[&str]) -> Vec<std::path::PathBuf> {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
+    let mut out = Vec::new();
+    for dir in dirs {
+        let mut files: Vec<_> = std::fs::read_dir(format!("{root}/{dir}"))
+            .expect("a fixtures folder")
+            .map(|e| e.expect("a fixtures entry").path())
+            .filter(|p| p.extension().is_some_and(|x| x == "json"))
+            .collect();
+        files.sort();
+        out.extend(files);
+    }
+    out
+}
+
 /// The reference cases of `shared/reference/cases.json` (copied to `tests/data/`).
 pub fn reference_cases() -> Vec<serde_json::Value> {
     let path = concat!(

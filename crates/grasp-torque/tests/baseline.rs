@@ -54,24 +54,16 @@ fn both(p: &GraspProblem) -> Option<(f64, f64, bool)> {
 
 #[test]
 fn table1_fixtures_never_get_worse() {
-    let dir = concat!(
-        concat!(env!("CARGO_MANIFEST_DIR"), "/../.."),
-        "/fixtures/table1"
-    );
     let mut n = 0;
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.extension().is_some_and(|e| e == "json") {
-            let p = load_problem(&path).unwrap();
-            let (after, before, admissible) =
-                both(&p).unwrap_or_else(|| panic!("{path:?} infeasible"));
-            assert!(admissible, "{path:?}: baseline torque not admissible");
-            assert!(
-                after <= before * (1.0 + 1e-9),
-                "{path:?}: {after} > {before}"
-            );
-            n += 1;
-        }
+    for path in grasp_testkit::fixture_paths(&["table1"]) {
+        let p = load_problem(&path).unwrap();
+        let (after, before, admissible) = both(&p).unwrap_or_else(|| panic!("{path:?} infeasible"));
+        assert!(admissible, "{path:?}: baseline torque not admissible");
+        assert!(
+            after <= before * (1.0 + 1e-9),
+            "{path:?}: {after} > {before}"
+        );
+        n += 1;
     }
     assert_eq!(n, 6);
 }

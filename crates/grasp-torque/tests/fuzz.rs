@@ -26,18 +26,10 @@ fn cases(default: u32) -> u32 {
 }
 
 fn corpus() -> Vec<String> {
-    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
-    let mut out = Vec::new();
-    for dir in ["", "/fuzz", "/geometry", "/table1"] {
-        let mut files: Vec<_> = std::fs::read_dir(format!("{root}{dir}"))
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .filter(|p| p.extension().is_some_and(|x| x == "json"))
-            .collect();
-        files.sort();
-        out.extend(files.iter().map(|f| std::fs::read_to_string(f).unwrap()));
-    }
-    out
+    grasp_testkit::fixture_paths(&["", "fuzz", "geometry", "table1"])
+        .iter()
+        .map(|f| std::fs::read_to_string(f).unwrap())
+        .collect()
 }
 
 const EXTREMES: [&str; 12] = [

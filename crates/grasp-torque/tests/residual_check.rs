@@ -7,18 +7,6 @@
 
 use grasp_torque::{GraspSolver, Matrix, Solution, SolverConfig, Status, WarmStart};
 
-fn fixtures() -> Vec<std::path::PathBuf> {
-    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
-    let mut out: Vec<_> = ["", "/hands", "/table1", "/geometry"]
-        .iter()
-        .flat_map(|d| std::fs::read_dir(format!("{root}{d}")).unwrap())
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "json"))
-        .collect();
-    out.sort();
-    out
-}
-
 /// `max_i |M_i x − t_i|` and the largest `Σ_j |M_ij x_j| + |t_i|` (the sums' size).
 fn residual(m: &Matrix, x: &[f64], t: &[f64]) -> (f64, f64) {
     (0..m.nrows()).fold((0.0f64, 0.0f64), |(r, s), i| {
@@ -73,7 +61,7 @@ fn check_against_plain(s: &Solution, solver: &GraspSolver, w: &[f64; 6], label: 
 
 #[test]
 fn residuals_match_a_plain_recomputation_and_a_moved_answer_fails() {
-    let files = fixtures();
+    let files = grasp_testkit::fixture_paths(&["", "hands", "table1", "geometry"]);
     assert!(files.len() >= 15, "{files:?}");
     let mut failed = 0;
     for path in &files {

@@ -8,21 +8,17 @@ use grasp_testkit::rescale;
 use grasp_torque::{solve, Backend, Cones, GraspProblem, Solution, SolverConfig, WarmStart};
 
 fn fixtures() -> Vec<(String, GraspProblem)> {
-    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
-    let mut out = Vec::new();
-    for dir in ["", "/table1", "/geometry"] {
-        for e in std::fs::read_dir(format!("{root}{dir}")).unwrap() {
-            let path = e.unwrap().path();
-            if path.extension().is_some_and(|x| x == "json") {
-                let mut p = grasp_torque::load_problem(&path).unwrap();
-                // The unit-invariant defaults: the reference set's conventions
-                // (`euclidean`, the paper's SFCe spacing) depend on the unit of length.
-                p.internal_forces = Default::default();
-                p.linearization.sfce_spacing = Default::default();
-                out.push((path.display().to_string(), p));
-            }
-        }
-    }
+    let mut out: Vec<_> = grasp_testkit::fixture_paths(&["", "table1", "geometry"])
+        .into_iter()
+        .map(|path| {
+            let mut p = grasp_torque::load_problem(&path).unwrap();
+            // The unit-invariant defaults: the reference set's conventions
+            // (`euclidean`, the paper's SFCe spacing) depend on the unit of length.
+            p.internal_forces = Default::default();
+            p.linearization.sfce_spacing = Default::default();
+            (path.display().to_string(), p)
+        })
+        .collect();
     out.sort_by(|a, b| a.0.cmp(&b.0));
     out
 }
