@@ -28,7 +28,7 @@
 use crate::dense::{backward, cholesky, dot4, forward, schur};
 use grasp_core::conic::soc_excess;
 use grasp_core::linalg::{decompose, RankThreshold};
-use grasp_core::matrix::norm_inf;
+use grasp_core::matrix::{add_columns, column_major, norm_inf};
 use grasp_core::{ConeKind, ConicForm, Matrix};
 
 /// Newton iterations per guess, and corrections of the guess.
@@ -95,10 +95,11 @@ pub(crate) struct Newton {
     /// `G − (A1ᵀu)(A1ᵀu)ᵀ`, O(k²) per cone and iteration.
     gram: Vec<f64>,
     /// `b − A x_p` and `x_p` are affine in the wrench, like b: their constant and
-    /// wrench parts side by side (rows × 7 and nx × 7), so that a solve costs
-    /// `(rows + nx) × 7`, not a pass through E⁺ (`b = (b0 + bw w)/α`).
-    b_red_map: Matrix,
-    xp_map: Matrix,
+    /// wrench parts side by side, column-major (rows `eq..` × 7 and nx × 7), so that a
+    /// solve costs seven passes down columns, not a pass through E⁺
+    /// (`b = (b0 + bw w)/α`).
+    b_red_cols: Vec<f64>,
+    xp_cols: Vec<f64>,
     /// `b − A x_p` and `x_p`, per solve.
     b_red: Vec<f64>,
     xp: Vec<f64>,
@@ -198,8 +199,8 @@ impl Newton {
         let ncmax = (orth.1 - orth.0) + socs.len();
         Self {
             gram,
-            b_red_map,
-            xp_map,
+            b_red_cols: column_major(rows - eq, 7, |i, c| b_red_map[(eq + i, c)]),
+            xp_cols: column_major(form.nx, 7, |j, c| xp_map[(j, c)]),
             null_basis_t: null_basis.transpose(),
             null_basis,
             a_red_cols: (0..(rows - eq) * k)
@@ -282,12 +283,11 @@ impl Newton {
             r * w[4],
             r * w[5],
         ];
-        for (j, xp) in self.xp.iter_mut().enumerate() {
-            *xp = dot7(self.xp_map.row(j), &wt);
-        }
-        for i in self.eq..self.b_red.len() {
-            self.b_red[i] = dot7(self.b_red_map.row(i), &wt);
-        }
+        self.xp.iter_mut().for_each(|v| *v = 0.0);
+        add_columns(&mut self.xp, &self.xp_cols, &wt, 1.0);
+        let b_red = &mut self.b_red[self.eq..];
+        b_red.iter_mut().for_each(|v| *v = 0.0);
+        add_columns(b_red, &self.b_red_cols, &wt, 1.0);
         // y = Nᵀ x, unless hot: then y is the last answer's, rescaled with x.
         if !hot {
             for (j, y) in self.y.iter_mut().enumerate() {
@@ -429,7 +429,7 @@ impl Newton {
     fn slacks(&mut self) {
         let eq = self.eq;
         self.s[eq..].copy_from_slice(&self.b_red[eq..]);
-        grasp_core::matrix::add_columns(&mut self.s[eq..], &self.a_red_cols, &self.y, -1.0);
+        add_columns(&mut self.s[eq..], &self.a_red_cols, &self.y, -1.0);
     }
 
     /// The conic dual of the current multipliers.
@@ -765,16 +765,6 @@ impl Newton {
 
 fn column(m: &Matrix, j: usize) -> Vec<f64> {
     (0..m.nrows()).map(|i| m[(i, j)]).collect()
-}
-
-/// `Σ a_i b_i` over seven terms, written out (a constant and a wrench).
-#[inline]
-fn dot7(a: &[f64], b: &[f64; 7]) -> f64 {
-    let a: &[f64; 7] = a.try_into().expect("rows of seven");
-    (a[0] * b[0] + a[1] * b[1])
-        + (a[2] * b[2] + a[3] * b[3])
-        + (a[4] * b[4] + a[5] * b[5])
-        + a[6] * b[6]
 }
 
 fn soc_norm(v: &[f64]) -> f64 {

@@ -28,7 +28,7 @@
 
 use crate::contact::ContactModel;
 use crate::linalg::{decompose, RankThreshold};
-use crate::matrix::{dot4, norm2, Matrix};
+use crate::matrix::{add_columns, column_major, dot4, norm2, Matrix};
 use crate::qp::{ConeRepr, RowId, TorqueQp};
 
 /// One block of rows of a [`ConicForm`], in row order.
@@ -91,6 +91,12 @@ pub struct ConicForm {
     /// normal force touches few, and the certificate's passes over A run whole blocks.
     a_padded: Matrix,
     row_span: Vec<(usize, usize)>,
+    /// `A`, `|A|` and `bw` column-major: the certificate's `b − A x` and the sizes of
+    /// its terms `|A| |x|`, and `b(w)`, are passes down columns, which vectorise where
+    /// a short row does not.
+    a_cols: Vec<f64>,
+    abs_cols: Vec<f64>,
+    bw_cols: Vec<f64>,
 }
 
 /// One affine row `a·x + s = b0 + bw·w`, before assembly.
@@ -292,6 +298,9 @@ impl ConicForm {
                 .unwrap_or_else(|_| Matrix::zeros(0, 0))
         });
         Self {
+            a_cols: column_major(n, nx, |i, j| a[(i, j)]),
+            abs_cols: column_major(n, nx, |i, j| a[(i, j)].abs()),
+            bw_cols: column_major(n, 6, |i, j| rows[i].bw[j]),
             nx,
             joints: m,
             free: d,
@@ -318,13 +327,8 @@ impl ConicForm {
     /// `b(w)` into `out`; returns its magnitude α = ‖b(w)‖∞, by which `out` is then
     /// divided (unless it is 0: every row homogeneous, τ = 0 optimal).
     pub fn b_into(&self, w: &[f64; 6], out: &mut [f64]) -> f64 {
-        for (i, b) in out.iter_mut().enumerate() {
-            let r = self.bw.row(i);
-            // Written out: six terms, no loop.
-            *b = self.b0[i]
-                + (r[0] * w[0] + r[1] * w[1] + r[2] * w[2])
-                + (r[3] * w[3] + r[4] * w[4] + r[5] * w[5]);
-        }
+        out.copy_from_slice(&self.b0);
+        add_columns(out, &self.bw_cols, w, 1.0);
         let alpha = out.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         if alpha > 0.0 {
             let inv = 1.0 / alpha;
@@ -364,22 +368,25 @@ impl ConicForm {
         let (rows, m, nx) = (self.rows(), self.joints, self.nx);
         let w4 = self.a_padded.ncols();
         // Every entry used is written below: no clearing.
-        if scratch.len() < rows + 3 * w4 {
-            scratch.resize(rows + 3 * w4, 0.0);
+        let need = 2 * rows + nx + 2 * w4;
+        if scratch.len() < need {
+            scratch.resize(need, 0.0);
         }
         let (s, rest) = scratch.split_at_mut(rows);
-        let (xp, rest) = rest.split_at_mut(w4);
+        let (size, rest) = rest.split_at_mut(rows);
+        let (xabs, rest) = rest.split_at_mut(nx);
         let (grad, gsize) = rest[..2 * w4].split_at_mut(w4);
-        xp[..nx].copy_from_slice(&x[..nx]);
-        xp[nx..].iter_mut().for_each(|v| *v = 0.0);
-        // s = b − A x, with the size of its terms, in one pass.
-        let mut scale = f64::MIN_POSITIVE;
-        for (i, si) in s.iter_mut().enumerate() {
-            let (lo, hi) = self.row_span[i];
-            let (ax, abs) = dot_abs4(&self.a_padded.row(i)[lo..hi], &xp[lo..hi]);
-            *si = b[i] - ax;
-            scale = fmax(scale, b[i].abs() + abs);
+        // s = b − A x, and the size of its terms |b| + |A| |x| (= Σ |a_ij x_j|).
+        s.copy_from_slice(&b[..rows]);
+        add_columns(s, &self.a_cols, &x[..nx], -1.0);
+        for (v, xj) in xabs.iter_mut().zip(x) {
+            *v = xj.abs();
         }
+        for (z, bi) in size.iter_mut().zip(b) {
+            *z = bi.abs();
+        }
+        add_columns(size, &self.abs_cols, xabs, 1.0);
+        let scale = size.iter().fold(f64::MIN_POSITIVE, |a, v| fmax(a, *v));
         let eq = match self.cones.first() {
             Some(&ConeKind::Zero(p)) => p,
             _ => 0,
@@ -483,32 +490,6 @@ fn fmax(a: f64, b: f64) -> f64 {
     } else {
         a
     }
-}
-
-/// `(Σ a_i x_i, Σ |a_i x_i|)` in four lanes (see [`crate::matrix::dot4`]).
-fn dot_abs4(a: &[f64], x: &[f64]) -> (f64, f64) {
-    let n = a.len().min(x.len());
-    let (a, x) = (&a[..n], &x[..n]);
-    let (mut s, mut t) = ([0.0f64; 4], [0.0f64; 4]);
-    let mut ca = a.chunks_exact(4);
-    let mut cx = x.chunks_exact(4);
-    for (p, q) in (&mut ca).zip(&mut cx) {
-        for l in 0..4 {
-            let v = p[l] * q[l];
-            s[l] += v;
-            t[l] += v.abs();
-        }
-    }
-    let (mut ts, mut ta) = (0.0, 0.0);
-    for (p, q) in ca.remainder().iter().zip(cx.remainder()) {
-        let v = p * q;
-        ts += v;
-        ta += v.abs();
-    }
-    (
-        (s[0] + s[1]) + (s[2] + s[3]) + ts,
-        (t[0] + t[1]) + (t[2] + t[3]) + ta,
-    )
 }
 
 /// The outcome of [`ConicForm::certificate`]: each measure relative to its terms.
