@@ -24,7 +24,7 @@
 //! Zero-length steps switch to Bland's rule, which rules out cycling.
 
 use grasp_core::linalg::{decompose, RankThreshold};
-use grasp_core::matrix::{add_columns, column_major, dot, norm_inf};
+use grasp_core::matrix::{add_columns, column_major, dot, min_value, norm_inf};
 use grasp_core::{
     Capabilities, ForceSpaceQp, LeastDistance, Matrix, Reason, RowId, Solution, Status, TorqueQp,
     TorqueSolver, WarmStart,
@@ -33,6 +33,7 @@ use grasp_core::{
 mod dense;
 mod exact;
 mod factor;
+mod hot;
 mod ipm;
 mod newton;
 pub use exact::{ExactSolver, CERTIFICATE_TOLERANCE};
@@ -234,6 +235,8 @@ struct Engine {
     /// Rounding floor of a fixed row's value per unit of `‖w‖∞`.
     fixed_floor: f64,
     ws: Workspace,
+    /// The hot start's answer as affine maps of the wrench, for one key set.
+    hot: hot::HotMap,
 }
 
 #[derive(Clone, Debug)]
@@ -415,6 +418,7 @@ impl Engine {
             fixed_m,
             fixed_floor,
             ws,
+            hot: hot::HotMap::new(k, nr, m),
         })
     }
 }
@@ -489,12 +493,8 @@ impl Engine {
         let k = self.null_basis.ncols();
         ws.b.copy_from_slice(&self.c0n);
         add_columns(&mut ws.b, &self.mn_cols, w, -1.0);
-        ws.u.iter_mut().for_each(|v| *v = 0.0);
-        add_columns(&mut ws.u, &self.pu_cols, w, 1.0);
-        // Starting point y0. A hot start keeps the factor of the last key set when the
-        // warm one is that set: the rows do not depend on the wrench, only b does.
-        ws.z.iter_mut().for_each(|v| *v = 0.0);
-        ws.e.iter_mut().for_each(|v| *v = 0.0);
+        // A hot start keeps the factor of the last key set when the warm one is that
+        // set: the rows do not depend on the wrench, only b does.
         let hot = ws.reusable
             && warm.active_set.is_some_and(|set| {
                 set.len() + 1 == ws.factor.rows().len()
@@ -503,6 +503,15 @@ impl Engine {
                         r != usize::MAX && ws.in_set[r]
                     })
             });
+        if hot && self.solve_mapped(w, out) {
+            return;
+        }
+        let ws = &mut self.ws;
+        ws.u.iter_mut().for_each(|v| *v = 0.0);
+        add_columns(&mut ws.u, &self.pu_cols, w, 1.0);
+        // Starting point y0.
+        ws.z.iter_mut().for_each(|v| *v = 0.0);
+        ws.e.iter_mut().for_each(|v| *v = 0.0);
         if !hot {
             ws.in_set.iter_mut().for_each(|v| *v = false);
             ws.factor.clear();
@@ -512,6 +521,7 @@ impl Engine {
         let end = state.run(warm);
         let iterations = state.iterations;
         self.ws.reusable &= matches!(end, End::Optimal) && self.ws.factor.contains(S_ROW);
+        self.note_hot_start(hot && matches!(end, End::Optimal) && iterations == 0);
         out.iterations = iterations;
         match end {
             End::Optimal => {
@@ -728,7 +738,7 @@ impl<'s> Iter<'s> {
                 // an elastic detour.
                 self.refresh_residuals();
                 let tol = self.feas_tol();
-                if self.s.ws.resid.iter().any(|&r| r < -tol) {
+                if min_value(&self.s.ws.resid) < -tol {
                     match self.dual_from_key_set() {
                         Err(row) => self.infeasible = Some(row),
                         Ok(true) => self.certify(),
@@ -1167,7 +1177,7 @@ impl<'s> Iter<'s> {
         self.refresh_residuals();
         let tol = self.feas_tol();
         let ws = &self.s.ws;
-        if ws.resid.iter().any(|&r| r < -tol) {
+        if min_value(&ws.resid) < -tol {
             return End::Numerical("the final point violates a row beyond tolerance");
         }
         let ltol = self.s.settings.multiplier_tolerance * norm_inf(&ws.z).max(self.scale) * 10.0;

@@ -260,11 +260,27 @@ pub fn add_columns(out: &mut [f64], cols: &[f64], x: &[f64], sign: f64) {
             *o += (x0 * a + x1 * b) + (x2 * c + x3 * d);
         }
     }
-    for (col, xj) in cs.zip(xs.remainder()) {
-        let xj = sign * xj;
-        for (o, c) in out.iter_mut().zip(col) {
-            *o += xj * c;
+    // The last one to three columns in one pass, not one pass each.
+    match (xs.remainder(), cs.next(), cs.next(), cs.next()) {
+        ([x0, x1, x2], Some(c0), Some(c1), Some(c2)) => {
+            let (x0, x1, x2) = (sign * x0, sign * x1, sign * x2);
+            for (((o, a), b), c) in out.iter_mut().zip(c0).zip(c1).zip(c2) {
+                *o += (x0 * a + x1 * b) + x2 * c;
+            }
         }
+        ([x0, x1], Some(c0), Some(c1), _) => {
+            let (x0, x1) = (sign * x0, sign * x1);
+            for ((o, a), b) in out.iter_mut().zip(c0).zip(c1) {
+                *o += x0 * a + x1 * b;
+            }
+        }
+        ([x0], Some(c0), _, _) => {
+            let x0 = sign * x0;
+            for (o, a) in out.iter_mut().zip(c0) {
+                *o += x0 * a;
+            }
+        }
+        _ => {}
     }
 }
 
@@ -314,10 +330,57 @@ pub fn column_major(rows: usize, cols: usize, f: impl Fn(usize, usize) -> f64) -
     out
 }
 
-/// Infinity norm of a slice (0 when empty).
+/// Infinity norm of a slice (0 when empty; NaN entries are skipped, as by `f64::max`).
+/// Four lanes of plain comparisons, which vectorise where `f64::max`'s NaN handling
+/// does not.
 #[inline]
 pub fn norm_inf(a: &[f64]) -> f64 {
-    a.iter().fold(0.0, |m, v| m.max(v.abs()))
+    let mut m = [0.0f64; 4];
+    let mut blocks = a.chunks_exact(4);
+    for b in &mut blocks {
+        for l in 0..4 {
+            let v = b[l].abs();
+            m[l] = if v > m[l] { v } else { m[l] };
+        }
+    }
+    for v in blocks.remainder() {
+        let v = v.abs();
+        m[0] = if v > m[0] { v } else { m[0] };
+    }
+    let (x, y) = (
+        if m[1] > m[0] { m[1] } else { m[0] },
+        if m[3] > m[2] { m[3] } else { m[2] },
+    );
+    if y > x {
+        y
+    } else {
+        x
+    }
+}
+
+/// The smallest entry (+∞ when empty; NaN entries are skipped), in four lanes like
+/// [`norm_inf`]: "does any row fall below −tol" as one vectorised pass.
+#[inline]
+pub fn min_value(a: &[f64]) -> f64 {
+    let mut m = [f64::INFINITY; 4];
+    let mut blocks = a.chunks_exact(4);
+    for b in &mut blocks {
+        for l in 0..4 {
+            m[l] = if b[l] < m[l] { b[l] } else { m[l] };
+        }
+    }
+    for &v in blocks.remainder() {
+        m[0] = if v < m[0] { v } else { m[0] };
+    }
+    let (x, y) = (
+        if m[1] < m[0] { m[1] } else { m[0] },
+        if m[3] < m[2] { m[3] } else { m[2] },
+    );
+    if y < x {
+        y
+    } else {
+        x
+    }
 }
 
 /// Euclidean norm of a slice.

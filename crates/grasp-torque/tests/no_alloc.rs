@@ -72,6 +72,11 @@ fn solves_reuse_the_workspace(cones: Cones) {
             assert!(s.resolve(&w).unwrap().is_optimal());
             assert!(s.solve(&w, &WarmStart::default()).unwrap().is_optimal());
         }
+        // A control loop: hot starts only, through the key set's maps once it settles.
+        for k in 0..50 {
+            w[k % 3] *= 1.0 + 0.001 * (k as f64).cos();
+            assert!(s.resolve(&w).unwrap().is_optimal());
+        }
         assert_eq!(allocations() - before, 0, "{name} ({cones}) allocated");
     }
 }
