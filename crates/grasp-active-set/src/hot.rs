@@ -4,13 +4,13 @@
 //! minimiser `y(w)` and its multipliers `λ(w)` (the factor's solve is linear in `b_K`,
 //! and `b = ĉ0 − M w`), the residuals `Ĥ y(w) − b(w)` of every row, and
 //! `τ(w) = D⁻¹(u0(w) + N y(w))`. A control loop whose key set stays put then pays one
-//! pass over the rows for `b` (whose size sets the tolerances) and one for the
-//! residuals, `min(k, 6)` columns each, and O(k + m) for the rest: no factor solve. The maps
-//! are built on the second consecutive reuse of a key set (seven factor solves and
-//! seven passes), so a key set reused once costs nothing extra. They belong to an
-//! ordered key set, not to a factorisation, and are checked against the factor's rows
-//! before each use; the answer they give passes the same tests, with the same
-//! tolerances, as the hot start through the factor, or the solve goes that way.
+//! pass over the rows for the residuals (six columns) and O(k + m) for the rest: no
+//! factor solve, and no `b(w)`. The maps are built on the second consecutive reuse of
+//! a key set (seven factor solves and seven passes), so a key set reused once costs
+//! nothing extra. They belong to an ordered key set, not to a factorisation, and are
+//! checked against the factor's rows before each use. The answer they give passes
+//! the tests of the hot start through the factor, with tolerances no looser, or the
+//! solve goes that way.
 
 use crate::{Engine, S_ROW};
 use grasp_core::matrix::{add_columns, min_value, norm_inf};
@@ -65,7 +65,7 @@ impl HotMap {
 impl Engine {
     /// The hot start through the maps, when they belong to the factor's key set and
     /// their answer for `w` holds every row with non-negative multipliers; false:
-    /// solve through the factor. `ws.b` must hold `b(w)`.
+    /// solve through the factor.
     pub(crate) fn solve_mapped(&mut self, w: &[f64; 6], out: &mut Solution) -> bool {
         let hm = &self.hot;
         if hm.rows.is_empty() || hm.rows != self.ws.factor.rows() {
@@ -73,31 +73,25 @@ impl Engine {
         }
         let k = self.null_basis.ncols();
         let ws = &mut self.ws;
-        // The tolerances of `Iter::feas_tol` and `Iter::multipliers_nonnegative`.
-        let scale = norm_inf(&ws.b).max(f64::MIN_POSITIVE);
         let y = &mut ws.z[..k];
         y.copy_from_slice(&hm.y0);
         add_columns(y, &hm.yw, w, 1.0);
         ws.z[k] = 0.0;
+        ws.resid.copy_from_slice(&hm.r0);
+        add_columns(&mut ws.resid, &hm.rw, w, 1.0);
+        // The tolerances of `Iter::feas_tol` and `Iter::multipliers_nonnegative` with
+        // ‖y‖∞ for their max(‖b‖∞, ‖y‖∞): no test is passed here that the hot start
+        // through the factor would fail, and b(w), one more pass over the rows, is not
+        // needed.
         let ynorm = norm_inf(&ws.z[..k]);
-        if k > 6 {
-            ws.resid.copy_from_slice(&hm.r0);
-            add_columns(&mut ws.resid, &hm.rw, w, 1.0);
-        } else {
-            // Fewer columns through y than through w.
-            for (r, b) in ws.resid.iter_mut().zip(&ws.b) {
-                *r = -b;
-            }
-            add_columns(&mut ws.resid, &self.a_cols, &ws.z[..k], 1.0);
-        }
-        if min_value(&ws.resid) < -self.settings.feasibility_tolerance * scale.max(ynorm) {
+        if min_value(&ws.resid) < -self.settings.feasibility_tolerance * ynorm {
             return false;
         }
         let t = hm.rows.len();
         let lambda = &mut ws.d[..t];
         lambda.copy_from_slice(&hm.l0[..t]);
         add_columns(lambda, &hm.lw[..6 * t], w, 1.0);
-        let ltol = self.settings.multiplier_tolerance * ynorm.max(scale) * 10.0;
+        let ltol = self.settings.multiplier_tolerance * ynorm * 10.0;
         if !hm
             .rows
             .iter()
@@ -180,18 +174,15 @@ impl Engine {
             for (pos, v) in l.iter_mut().enumerate() {
                 *v = ws.factor.lambda(pos);
             }
-            // Residuals Ĥ y − b (b's part is −ĉ0 or +M's column), when k > 6 makes
-            // them cheaper through w than through y.
-            if k > 6 {
-                for (ri, i) in r.iter_mut().zip(0..nr) {
-                    *ri = if c == 0 {
-                        -self.c0n[i]
-                    } else {
-                        self.mn_cols[(c - 1) * nr + i]
-                    };
-                }
-                add_columns(r, &self.a_cols, y, 1.0);
+            // Residuals Ĥ y − b: b's part is −ĉ0 or +M's column.
+            for (ri, i) in r.iter_mut().zip(0..nr) {
+                *ri = if c == 0 {
+                    -self.c0n[i]
+                } else {
+                    self.mn_cols[(c - 1) * nr + i]
+                };
             }
+            add_columns(r, &self.a_cols, y, 1.0);
             // τ = D⁻¹(u0 + N y), u0 = P w.
             for (ti, i) in tau.iter_mut().zip(0..m) {
                 *ti = if c == 0 {

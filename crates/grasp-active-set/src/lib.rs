@@ -491,8 +491,6 @@ impl Engine {
         }
         let ws = &mut self.ws;
         let k = self.null_basis.ncols();
-        ws.b.copy_from_slice(&self.c0n);
-        add_columns(&mut ws.b, &self.mn_cols, w, -1.0);
         // A hot start keeps the factor of the last key set when the warm one is that
         // set: the rows do not depend on the wrench, only b does.
         let hot = ws.reusable
@@ -507,6 +505,8 @@ impl Engine {
             return;
         }
         let ws = &mut self.ws;
+        ws.b.copy_from_slice(&self.c0n);
+        add_columns(&mut ws.b, &self.mn_cols, w, -1.0);
         ws.u.iter_mut().for_each(|v| *v = 0.0);
         add_columns(&mut ws.u, &self.pu_cols, w, 1.0);
         // Starting point y0.
