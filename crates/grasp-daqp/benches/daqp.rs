@@ -8,7 +8,9 @@
 //! DAQP as `min ½ τᵀ(2W)τ` s.t. `c(w) ≤ H τ`, `C τ = e(w)`. For each of a set of
 //! wrenches near the fixture's, interleaved call by call:
 //! - native cold: the backend alone from a cold start (it forms c(w) itself);
-//! - native warm: the same, warm-started from the answer for the wrench 1 % away;
+//! - native warm: a control loop on a solver of its own, alternating between the wrench
+//!   and the one 1 % away, each solve warm-started from the other's answer: the hot
+//!   start once the key set has settled (its affine maps; docs/solver.md, Step 1);
 //! - DAQP per wrench: c(w) and e(w) (the same Rust code), the bounds update, a cleared
 //!   working set and the solve, DAQP set up once per grasp;
 //! - DAQP `solve_time`: DAQP's own clock around its solve alone.
@@ -116,6 +118,7 @@ fn main() {
             let solver = GraspSolver::new(&p, &config).unwrap();
             let qp = solver.problem().clone();
             let mut native = config.build(qp.clone()).unwrap();
+            let mut looped = config.build(qp.clone()).unwrap();
             let ld = qp.least_distance();
             let (n, r, e) = (qp.joints(), ld.h.nrows(), ld.eq.nrows());
             let mut h = vec![0.0; n * n];
@@ -158,10 +161,9 @@ fn main() {
                     .zip(ld.weights)
                     .map(|(t, wj)| wj * t * t)
                     .sum();
-                let warm = WarmStart {
-                    torque: Some(&prev.torque),
-                    active_set: prev.active_set.as_deref(),
-                };
+                // The control loop's two answers, at w and at the wrench 1 % away.
+                let (mut at_w, mut at_near) = (Solution::default(), Solution::default());
+                looped.solve_raw(&near, &cold, &mut at_near);
                 let mut bounds = |d: &mut Daqp| {
                     qp.c_into(&w, &mut c);
                     qp.model.e_into(&w, &mut ev);
@@ -188,8 +190,19 @@ fn main() {
                     let s = Instant::now();
                     native.solve_raw(black_box(&w), &cold, &mut sol);
                     tc.push(s.elapsed().as_secs_f64() * 1e6);
+                    let warm = WarmStart {
+                        torque: Some(&at_near.torque),
+                        active_set: at_near.active_set.as_deref(),
+                    };
                     let s = Instant::now();
-                    native.solve_raw(black_box(&w), &warm, &mut sol);
+                    looped.solve_raw(black_box(&w), &warm, &mut at_w);
+                    tw.push(s.elapsed().as_secs_f64() * 1e6);
+                    let warm = WarmStart {
+                        torque: Some(&at_w.torque),
+                        active_set: at_w.active_set.as_deref(),
+                    };
+                    let s = Instant::now();
+                    looped.solve_raw(black_box(&near), &warm, &mut at_near);
                     tw.push(s.elapsed().as_secs_f64() * 1e6);
                     let s = Instant::now();
                     bounds(&mut daqp);
@@ -197,6 +210,18 @@ fn main() {
                     td.push(s.elapsed().as_secs_f64() * 1e6);
                     ts.push(res.solve_time * 1e6);
                 }
+                // The loop's answer is the cold one.
+                let looped_objective: f64 = at_w
+                    .torque
+                    .iter()
+                    .zip(ld.weights)
+                    .map(|(t, wj)| wj * t * t)
+                    .sum();
+                assert!(
+                    at_w.status == Status::Optimal
+                        && (looped_objective - objective).abs() <= 1e-9 * objective.abs(),
+                    "{name} N = {sides}: the control loop's answer {looped_objective} vs {objective}"
+                );
                 cold_t.push(median(tc));
                 warm_t.push(median(tw));
                 daqp_t.push(median(td));
