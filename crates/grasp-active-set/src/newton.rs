@@ -744,8 +744,11 @@ impl Newton {
                 self.frozen = Some(nc);
                 return Step::Converged;
             }
-            // A clearly negative multiplier: this guess is wrong, change it now.
-            if it >= 1 {
+            // A clearly negative multiplier: this guess is wrong, change it now. After
+            // the first step only one far below zero counts (a tenth of the largest:
+            // the start's multipliers came from the polyhedra), after that any below
+            // rounding.
+            {
                 // On the multipliers as stored (damped by the step), which the caller's
                 // correction reads.
                 let stored = |r: usize| match self.owner[r] {
@@ -753,8 +756,8 @@ impl Newton {
                     Owner::Cone(k) => self.nu_cone[k],
                 };
                 let numax = (0..nc).fold(f64::MIN_POSITIVE, |a, r| a.max(stored(r).abs()));
-                let negative = (0..nc).any(|r| stored(r) < -1e-6 * numax);
-                if negative {
+                let bar = if it == 0 { 0.1 } else { 1e-6 };
+                if (0..nc).any(|r| stored(r) < -bar * numax) {
                     return Step::Negative;
                 }
             }

@@ -376,17 +376,9 @@ impl ConicForm {
         let (size, rest) = rest.split_at_mut(rows);
         let (xabs, rest) = rest.split_at_mut(nx);
         let (grad, gsize) = rest[..2 * w4].split_at_mut(w4);
-        // s = b − A x, and the size of its terms |b| + |A| |x| (= Σ |a_ij x_j|).
+        // s = b − A x.
         s.copy_from_slice(&b[..rows]);
         add_columns(s, &self.a_cols, &x[..nx], -1.0);
-        for (v, xj) in xabs.iter_mut().zip(x) {
-            *v = xj.abs();
-        }
-        for (z, bi) in size.iter_mut().zip(b) {
-            *z = bi.abs();
-        }
-        add_columns(size, &self.abs_cols, xabs, 1.0);
-        let scale = size.iter().fold(f64::MIN_POSITIVE, |a, v| fmax(a, *v));
         let eq = match self.cones.first() {
             Some(&ConeKind::Zero(p)) => p,
             _ => 0,
@@ -454,6 +446,24 @@ impl ConicForm {
         let stationarity = residual / colsize;
         // The maxima above skip NaN: a non-finite input fails here instead.
         let finite = basis_ok && b.iter().chain(x).chain(&z[eq..]).all(|v| v.is_finite());
+        // Primal violation against the size of its terms, |b_i| + Σ_j |a_ij x_j|. Its
+        // lower bound max(|b_i|, |(A x)_i|) is formed first: a violation within
+        // tolerance of that is within tolerance of the terms, and only a point that
+        // fails it pays for the second pass, |A| |x|.
+        let mut scale = f64::MIN_POSITIVE;
+        for (bi, si) in b.iter().zip(s.iter()) {
+            scale = fmax(scale, fmax(bi.abs(), (bi - si).abs()));
+        }
+        if primal > tol * scale {
+            for (v, xj) in xabs.iter_mut().zip(x) {
+                *v = xj.abs();
+            }
+            for (z, bi) in size.iter_mut().zip(b) {
+                *z = bi.abs();
+            }
+            add_columns(size, &self.abs_cols, xabs, 1.0);
+            scale = size.iter().fold(scale, |a, v| fmax(a, *v));
+        }
         let (primal, dual) = (primal / scale, dual / zscale);
         // Complementarity against the sizes of the gap's terms (xᵀPx + bᵀz at a
         // stationary point). The scaled problem's right-hand side has size 1, so its
@@ -495,7 +505,9 @@ fn fmax(a: f64, b: f64) -> f64 {
 /// The outcome of [`ConicForm::certificate`]: each measure relative to its terms.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Certificate {
-    /// Largest cone or equality violation of `s = b − A x`.
+    /// Largest cone or equality violation of `s = b − A x`, relative to the largest
+    /// `|b_i| + Σ_j |a_ij x_j|` (to `max(|b_i|, |(A x)_i|)`, a lower bound of it, when
+    /// that already passes).
     pub primal: f64,
     /// Largest violation of `z ∈ K*`.
     pub dual: f64,
