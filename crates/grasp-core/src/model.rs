@@ -173,6 +173,9 @@ pub struct GraspModel {
     pub stacked_cols: Vec<f64>,
     /// `[C | eq_w]` column-major (p rows, m + 6 columns), for `C τ − e(w)` likewise.
     pub eq_cols: Vec<f64>,
+    /// `[Z1 | Z2 | N]` column-major (n rows), for `f = Z1 w + Z2 τ + N ξ` in passes
+    /// down columns.
+    pub force_cols: Vec<f64>,
 }
 
 /// The joint space of a model whose torques are actuator forces: `τ = T u`.
@@ -446,7 +449,17 @@ impl GraspModel {
                 eq_w[(i, j - m)]
             }
         });
+        let force_cols = column_major(n, 6 + m + passive_basis.ncols(), |i, j| {
+            if j < 6 {
+                z1[(i, j)]
+            } else if j < 6 + m {
+                z2[(i, j - 6)]
+            } else {
+                passive_basis[(i, j - 6 - m)]
+            }
+        });
         Ok(Self {
+            force_cols,
             grasp_matrix: p.grasp_matrix.clone(),
             contacts: p.contacts.clone(),
             offsets,
@@ -542,17 +555,14 @@ impl GraspModel {
     /// `f = Z1 w + Z2 τ + N ξ` into `out` (eq. 31); `xi` is empty unless the internal
     /// forces are free.
     pub fn forces_into(&self, w: &[f64; 6], tau: &[f64], xi: &[f64], out: &mut [f64]) {
-        // Z1's rows have six entries: written out, they cost a fraction of a general
-        // dot product.
-        let z1 = self.z1.as_slice().chunks_exact(6);
-        for (i, (o, r)) in out.iter_mut().zip(z1).enumerate() {
-            let mut v = (r[0] * w[0] + r[1] * w[1]) + (r[2] * w[2] + r[3] * w[3]);
-            v += r[4] * w[4] + r[5] * w[5];
-            v += dot(self.z2.row(i), tau);
-            if !xi.is_empty() {
-                v += dot(self.passive_basis.row(i), xi);
-            }
-            *o = v;
+        let n = out.len();
+        let (zw, rest) = self.force_cols.split_at(6 * n);
+        let (zt, passive) = rest.split_at(tau.len() * n);
+        out.fill(0.0);
+        add_columns(out, zw, w, 1.0);
+        add_columns(out, zt, tau, 1.0);
+        if !xi.is_empty() {
+            add_columns(out, passive, xi, 1.0);
         }
     }
 
