@@ -84,7 +84,10 @@ impl Engine {
         // through the factor would fail, and b(w), one more pass over the rows, is not
         // needed.
         let ynorm = norm_inf(&ws.z[..k]);
-        if min_value(&ws.resid) < -self.settings.feasibility_tolerance * ynorm {
+        // (Overflow at an extreme wrench: the factor's path decides.)
+        if !ws.z[..k].iter().all(|v| v.is_finite())
+            || min_value(&ws.resid) < -self.settings.feasibility_tolerance * ynorm
+        {
             return false;
         }
         let t = hm.rows.len();
