@@ -24,7 +24,7 @@
 //! Zero-length steps switch to Bland's rule, which rules out cycling.
 
 use grasp_core::linalg::{decompose, RankThreshold};
-use grasp_core::matrix::{add_columns, column_major, dot, min_value, norm_inf};
+use grasp_core::matrix::{add_columns, column_major, dot, min_value, norm_inf, write_columns};
 use grasp_core::{
     Capabilities, ForceSpaceQp, LeastDistance, Matrix, Reason, RowId, Solution, Status, TorqueQp,
     TorqueSolver, WarmStart,
@@ -325,8 +325,11 @@ impl Engine {
         let null_basis = dec.null_basis;
         // u0 = Cd⁺ e = −row_basis (row_transform eq_w) w: the small product first.
         let pu = dec.row_basis.matmul(&dec.row_transform.matmul(qp.eq_w));
-        let null_cols = column_major(m, k, |i, j| null_basis[(i, j)]);
-        let pu_cols = column_major(m, 6, |i, j| -pu[(i, j)]);
+        let mut null_cols = vec![0.0; m * k];
+        write_columns(&null_basis, &mut null_cols, m);
+        let mut pu_cols = vec![0.0; m * 6];
+        write_columns(&pu, &mut pu_cols, m);
+        pu_cols.iter_mut().for_each(|v| *v = -*v);
         // One product for both: H D⁻¹ [N | −pu], with D⁻¹ folded into the short side.
         let np = Matrix::from_fn(m, k + 6, |i, j| {
             dinv[i]
@@ -370,7 +373,8 @@ impl Engine {
         let a = Matrix::from_fn(nr, k, |r, j| hn(h_row[r])[j] / norms[h_row[r]]);
         let nu: Vec<f64> = h_row.iter().map(|&i| norms[i]).collect();
         let c0n: Vec<f64> = h_row.iter().map(|&i| qp.c0[i] / norms[i]).collect();
-        let a_cols = column_major(nr, k, |r, j| a[(r, j)]);
+        let mut a_cols = vec![0.0; nr * k];
+        write_columns(&a, &mut a_cols, nr);
         let mn_cols = column_major(nr, 6, |r, j| mfull(h_row[r], j) / norms[h_row[r]]);
         let fixed_c0 = fixed.iter().map(|&i| qp.c0[i]).collect();
         let fixed_m = Matrix::from_fn(fixed.len(), 6, |r, j| mfull(fixed[r], j));

@@ -320,6 +320,21 @@ pub fn add_column_block(
     }
 }
 
+/// Writes `m`'s columns into `dst`, column j at `j · ld..` (rows `0..m.nrows()` of
+/// it): a block of a column-major matrix whose columns are `ld` long. Row by row from
+/// the row-major data, with no per-entry indexing of `m`.
+pub fn write_columns(m: &Matrix, dst: &mut [f64], ld: usize) {
+    let (rows, cols) = (m.nrows(), m.ncols());
+    if rows == 0 || cols == 0 {
+        return;
+    }
+    for (i, row) in m.as_slice().chunks_exact(cols).enumerate() {
+        for (j, &v) in row.iter().enumerate() {
+            dst[j * ld + i] = v;
+        }
+    }
+}
+
 /// The entries `f(i, j)` of a rows × cols matrix, column after column (the layout of
 /// [`add_columns`]).
 pub fn column_major(rows: usize, cols: usize, f: impl Fn(usize, usize) -> f64) -> Vec<f64> {

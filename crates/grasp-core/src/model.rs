@@ -24,7 +24,7 @@
 use crate::contact::ContactModel;
 use crate::error::ModelError;
 use crate::linalg::{decompose, RankThreshold};
-use crate::matrix::{add_columns, column_major, dot, norm_inf, Matrix};
+use crate::matrix::{add_columns, column_major, dot, norm_inf, write_columns, Matrix};
 use crate::problem::GraspProblem;
 use serde::{Deserialize, Serialize};
 
@@ -440,24 +440,18 @@ impl GraspModel {
             let jt = &a.joint_jacobian_transpose;
             a.joint_reach = (0..jt.nrows()).map(|i| reach(jt.row(i))).collect();
         }
-        let stacked_cols = column_major(rows, n, |i, j| a_row(i)[j]);
+        let mut stacked_cols = vec![0.0; rows * n];
+        write_columns(&p.grasp_matrix, &mut stacked_cols, rows);
+        write_columns(&unactuated, &mut stacked_cols[6..], rows);
+        write_columns(&jt, &mut stacked_cols[6 + k..], rows);
         let p_eq = eq.nrows();
-        let eq_cols = column_major(p_eq, m + 6, |i, j| {
-            if j < m {
-                eq[(i, j)]
-            } else {
-                eq_w[(i, j - m)]
-            }
-        });
-        let force_cols = column_major(n, 6 + m + passive_basis.ncols(), |i, j| {
-            if j < 6 {
-                z1[(i, j)]
-            } else if j < 6 + m {
-                z2[(i, j - 6)]
-            } else {
-                passive_basis[(i, j - 6 - m)]
-            }
-        });
+        let mut eq_cols = vec![0.0; p_eq * (m + 6)];
+        write_columns(&eq, &mut eq_cols, p_eq);
+        write_columns(&eq_w, &mut eq_cols[p_eq * m..], p_eq);
+        let mut force_cols = vec![0.0; n * (6 + m + passive_basis.ncols())];
+        write_columns(&z1, &mut force_cols, n);
+        write_columns(&z2, &mut force_cols[6 * n..], n);
+        write_columns(&passive_basis, &mut force_cols[(6 + m) * n..], n);
         Ok(Self {
             force_cols,
             grasp_matrix: p.grasp_matrix.clone(),
