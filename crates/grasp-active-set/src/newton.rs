@@ -84,7 +84,7 @@ pub(crate) struct Newton {
     /// The consistency equalities eliminated once per grasp: `x = x_p + N y` with
     /// `x_p = E⁺ b_E` (orthogonal to N), so the objective is `‖y‖²` plus a constant.
     null_basis: Matrix,
-    /// Nᵀ (k × nx), for row-wise products.
+    /// Nᵀ (k × nx): its rows are N's columns, for `x = x_p + N y` down columns.
     null_basis_t: Matrix,
     /// Rows of A times N (rows × k); the equality rows unused.
     a_red: Matrix,
@@ -290,9 +290,9 @@ impl Newton {
         add_columns(b_red, &self.b_red_cols, &wt, 1.0);
         // y = Nᵀ x, unless hot: then y is the last answer's, rescaled with x.
         if !hot {
-            for (j, y) in self.y.iter_mut().enumerate() {
-                *y = dot4(self.null_basis_t.row(j), &self.x);
-            }
+            // (N's rows are Nᵀ's columns.)
+            self.y.iter_mut().for_each(|v| *v = 0.0);
+            add_columns(&mut self.y, self.null_basis.as_slice(), &self.x, 1.0);
         }
         for change in 0..MAX_CHANGES {
             let end = match (hot && change == 0, self.frozen) {
@@ -375,9 +375,9 @@ impl Newton {
     /// `x = x_p + N y`, and the conic dual on the inequality rows (the certificate
     /// needs none on the equalities).
     fn finish(&mut self, form: &ConicForm) {
-        for i in 0..form.nx {
-            self.x[i] = self.xp[i] + dot4(self.null_basis.row(i), &self.y);
-        }
+        let x = &mut self.x[..form.nx];
+        x.copy_from_slice(&self.xp);
+        add_columns(x, self.null_basis_t.as_slice(), &self.y, 1.0);
         self.dual();
     }
 
