@@ -228,18 +228,6 @@ mod tests {
         GraspProblem, ModelOptions, Solution, Status, TorqueQp, TorqueSolver, WarmStart,
     };
 
-    /// A deterministic sequence in [−1, 1].
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        }
-    }
-
     fn problems() -> Vec<(String, GraspProblem)> {
         let mut out: Vec<(String, GraspProblem)> = grasp_testkit::fixture_paths(&["", "hands"])
             .into_iter()
@@ -270,7 +258,7 @@ mod tests {
                 let qp = TorqueQp::from_problem(&p, &ModelOptions::default()).unwrap();
                 let mut hot = ActiveSetSolver::new(qp.clone(), Default::default()).unwrap();
                 let mut cold = ActiveSetSolver::new(qp, Default::default()).unwrap();
-                let mut rng = Lcg(0x9e37_79b9 ^ sides as u64);
+                let mut rng = grasp_testkit::Rng(0x9e37_79b9 ^ sides as u64);
                 let mut last = Solution::default();
                 hot.solve_raw(&p.wrench, &WarmStart::default(), &mut last);
                 if last.status != Status::Optimal {
@@ -280,8 +268,9 @@ mod tests {
                 for step in 0..12 {
                     // Small steps for a while (the key set settles), then 1 % ones.
                     let size = if step < 4 { 1e-4 } else { 1e-2 };
-                    let w: [f64; 6] =
-                        std::array::from_fn(|i| p.wrench[i] * (1.0 + size * rng.next()));
+                    let w: [f64; 6] = std::array::from_fn(|i| {
+                        p.wrench[i] * (1.0 + size * rng.uniform(-1.0, 1.0))
+                    });
                     let warm = WarmStart {
                         torque: Some(&last.torque),
                         active_set: last.active_set.as_deref(),

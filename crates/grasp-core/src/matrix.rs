@@ -346,56 +346,34 @@ pub fn column_major(rows: usize, cols: usize, f: impl Fn(usize, usize) -> f64) -
 }
 
 /// Infinity norm of a slice (0 when empty; NaN entries are skipped, as by `f64::max`).
-/// Four lanes of plain comparisons, which vectorise where `f64::max`'s NaN handling
-/// does not.
 #[inline]
 pub fn norm_inf(a: &[f64]) -> f64 {
-    let mut m = [0.0f64; 4];
-    let mut blocks = a.chunks_exact(4);
-    for b in &mut blocks {
-        for l in 0..4 {
-            let v = b[l].abs();
-            m[l] = if v > m[l] { v } else { m[l] };
-        }
-    }
-    for v in blocks.remainder() {
-        let v = v.abs();
-        m[0] = if v > m[0] { v } else { m[0] };
-    }
-    let (x, y) = (
-        if m[1] > m[0] { m[1] } else { m[0] },
-        if m[3] > m[2] { m[3] } else { m[2] },
-    );
-    if y > x {
-        y
-    } else {
-        x
-    }
+    fold4(a, 0.0, f64::abs, |v, m| v > m)
 }
 
-/// The smallest entry (+∞ when empty; NaN entries are skipped), in four lanes like
-/// [`norm_inf`]: "does any row fall below −tol" as one vectorised pass.
+/// The smallest entry (+∞ when empty; NaN entries are skipped): "does any row fall
+/// below −tol" as one vectorised pass.
 #[inline]
 pub fn min_value(a: &[f64]) -> f64 {
-    let mut m = [f64::INFINITY; 4];
+    fold4(a, f64::INFINITY, |v| v, |v, m| v < m)
+}
+
+/// The `better` of `map(a_i)` and `init`, in four lanes of plain comparisons, which
+/// vectorise where `f64::max`'s NaN handling does not (a NaN is never better).
+#[inline(always)]
+fn fold4(a: &[f64], init: f64, map: impl Fn(f64) -> f64, better: impl Fn(f64, f64) -> bool) -> f64 {
+    let pick = |v: f64, m: f64| if better(v, m) { v } else { m };
+    let mut m = [init; 4];
     let mut blocks = a.chunks_exact(4);
     for b in &mut blocks {
         for l in 0..4 {
-            m[l] = if b[l] < m[l] { b[l] } else { m[l] };
+            m[l] = pick(map(b[l]), m[l]);
         }
     }
     for &v in blocks.remainder() {
-        m[0] = if v < m[0] { v } else { m[0] };
+        m[0] = pick(map(v), m[0]);
     }
-    let (x, y) = (
-        if m[1] < m[0] { m[1] } else { m[0] },
-        if m[3] < m[2] { m[3] } else { m[2] },
-    );
-    if y < x {
-        y
-    } else {
-        x
-    }
+    pick(pick(m[1], m[0]), pick(m[3], m[2]))
 }
 
 /// Euclidean norm of a slice.

@@ -21,7 +21,9 @@
 //! `GT_BENCH_WRENCHES` (default 10) wrenches per QP.
 
 use grasp_daqp::{Daqp, INFINITY};
-use grasp_torque::{Backend, GraspProblem, GraspSolver, Solution, SolverConfig, Status, WarmStart};
+use grasp_torque::{
+    Backend, GraspProblem, GraspSolver, Solution, SolverConfig, Status, TorqueSolver, WarmStart,
+};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -40,6 +42,17 @@ const FIXTURES: [(&str, &str); 9] = [
 fn median(mut t: Vec<f64>) -> f64 {
     t.sort_by(f64::total_cmp);
     t[t.len() / 2]
+}
+
+/// One control tick, timed in µs: `w` from the answer `from`, into `to`.
+fn tick(solver: &mut dyn TorqueSolver, w: &[f64; 6], from: &Solution, to: &mut Solution) -> f64 {
+    let warm = WarmStart {
+        torque: Some(&from.torque),
+        active_set: from.active_set.as_deref(),
+    };
+    let s = Instant::now();
+    solver.solve_raw(black_box(w), &warm, to);
+    s.elapsed().as_secs_f64() * 1e6
 }
 
 /// Shifted geometric mean, shift 10 µs.
@@ -190,20 +203,8 @@ fn main() {
                     let s = Instant::now();
                     native.solve_raw(black_box(&w), &cold, &mut sol);
                     tc.push(s.elapsed().as_secs_f64() * 1e6);
-                    let warm = WarmStart {
-                        torque: Some(&at_near.torque),
-                        active_set: at_near.active_set.as_deref(),
-                    };
-                    let s = Instant::now();
-                    looped.solve_raw(black_box(&w), &warm, &mut at_w);
-                    tw.push(s.elapsed().as_secs_f64() * 1e6);
-                    let warm = WarmStart {
-                        torque: Some(&at_w.torque),
-                        active_set: at_w.active_set.as_deref(),
-                    };
-                    let s = Instant::now();
-                    looped.solve_raw(black_box(&near), &warm, &mut at_near);
-                    tw.push(s.elapsed().as_secs_f64() * 1e6);
+                    tw.push(tick(looped.as_mut(), &w, &at_near, &mut at_w));
+                    tw.push(tick(looped.as_mut(), &near, &at_w, &mut at_near));
                     let s = Instant::now();
                     bounds(&mut daqp);
                     let res = daqp.solve();
