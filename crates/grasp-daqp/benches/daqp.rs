@@ -133,6 +133,9 @@ fn main() {
             let mut native = config.build(qp.clone()).unwrap();
             let mut looped = config.build(qp.clone()).unwrap();
             let ld = qp.least_distance();
+            // σ = Σ w_j τ_j² of a torque.
+            let sigma =
+                |t: &[f64]| -> f64 { t.iter().zip(ld.weights).map(|(t, wj)| wj * t * t).sum() };
             let (n, r, e) = (qp.joints(), ld.h.nrows(), ld.eq.nrows());
             let mut h = vec![0.0; n * n];
             for j in 0..n {
@@ -168,12 +171,7 @@ fn main() {
                     continue;
                 }
                 tried += 1;
-                let objective: f64 = sol
-                    .torque
-                    .iter()
-                    .zip(ld.weights)
-                    .map(|(t, wj)| wj * t * t)
-                    .sum();
+                let objective = sigma(&sol.torque);
                 // The control loop's two answers, at w and at the wrench 1 % away.
                 let (mut at_w, mut at_near) = (Solution::default(), Solution::default());
                 looped.solve_raw(&near, &cold, &mut at_near);
@@ -190,12 +188,7 @@ fn main() {
                     continue;
                 }
                 // (DAQP's fval is of its internal problem: the objective from its x.)
-                let theirs: f64 = daqp
-                    .x()
-                    .iter()
-                    .zip(ld.weights)
-                    .map(|(t, wj)| wj * t * t)
-                    .sum();
+                let theirs = sigma(daqp.x());
                 worst_rel = worst_rel.max((theirs - objective).abs() / objective.abs().max(1e-300));
                 solved += 1;
                 let (mut tc, mut tw, mut td, mut ts) = (vec![], vec![], vec![], vec![]);
@@ -212,12 +205,7 @@ fn main() {
                     ts.push(res.solve_time * 1e6);
                 }
                 // The loop's answer is the cold one.
-                let looped_objective: f64 = at_w
-                    .torque
-                    .iter()
-                    .zip(ld.weights)
-                    .map(|(t, wj)| wj * t * t)
-                    .sum();
+                let looped_objective = sigma(&at_w.torque);
                 assert!(
                     at_w.status == Status::Optimal
                         && (looped_objective - objective).abs() <= 1e-9 * objective.abs(),
