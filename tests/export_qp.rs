@@ -191,7 +191,14 @@ fn bench_reports_medians() {
     );
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["status"], "optimal");
-    for key in ["build_us", "cold_us", "cold_raw_us", "warm_1pct_us"] {
+    for key in [
+        "build_us",
+        "cold_us",
+        "cold_raw_us",
+        "warm_1pct_us",
+        "cold_lazy_us",
+        "warm_1pct_lazy_us",
+    ] {
         let t = v[key].as_f64().unwrap();
         assert!(t.is_finite() && t > 0.0, "{key} = {t}");
     }

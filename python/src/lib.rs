@@ -139,6 +139,7 @@ impl Settings {
         Overrides {
             backend: parsed("backend", self.backend.as_deref())?,
             cones: parsed("cones", self.cones.as_deref())?.unwrap_or_default(),
+            check: Default::default(),
             sides: self.sides,
             latitudes: self.latitudes,
             sfce_spacing: match self.sfce_spacing.as_deref() {

@@ -33,7 +33,7 @@ mod table;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use grasp_torque::{
-    Backend, Cones, GraspProblem, InternalForces, Overrides, SfceSpacing, SolverConfig,
+    Backend, Check, Cones, GraspProblem, InternalForces, Overrides, SfceSpacing, SolverConfig,
 };
 use std::path::PathBuf;
 
@@ -143,6 +143,7 @@ impl ModelArgs {
         Overrides {
             backend,
             cones,
+            check: Check::Full,
             sides: self.sides,
             latitudes: self.latitudes,
             sfce_spacing: self.sfce_spacing.map(|s| match s {

@@ -170,6 +170,7 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     free_internal_forces: false,
     warm_key_set: true,
     warm_torque: true,
+    certifies_rows: true,
 };
 
 /// Relative accuracy of the native backend's answers: the tolerance of the core's
@@ -1136,15 +1137,15 @@ impl<'s> Iter<'s> {
         }
     }
 
-    /// After a successful dual phase: the minimiser and exact multipliers of the final
-    /// key set (the dual phase's residuals are fresh), and whether they certify
-    /// optimality, so that Steps 2–4 have nothing left to do.
+    /// After a successful dual phase: the exact multipliers of the final key set, and
+    /// whether they certify optimality, so that Steps 2–4 have nothing left to do. The
+    /// answer stays the iterate, whose rows the dual phase has just checked from
+    /// scratch (the key set's minimiser is the same point in exact arithmetic); s is
+    /// pinned at 0, and moves no row (e = 0 in the dual phase).
     fn certify(&mut self) {
-        let k = self.k();
         self.subproblem(0.0);
-        let ws = &mut self.s.ws;
-        ws.z.copy_from_slice(&ws.zstar);
-        ws.z[k] = 0.0;
+        let k = self.k();
+        self.s.ws.z[k] = 0.0;
         self.certified = self.multipliers_nonnegative();
     }
 

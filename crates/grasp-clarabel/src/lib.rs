@@ -20,6 +20,7 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     free_internal_forces: true,
     warm_key_set: false,
     warm_torque: false,
+    certifies_rows: false,
 };
 
 /// Relative accuracy of Clarabel's answers at the default settings: the tolerance of

@@ -30,6 +30,6 @@ pub use qp::{
     ConeRepr, Constraints, ContactBlock, ForceSpaceQp, LeastDistance, RowFactors, RowId, TorqueQp,
 };
 pub use solver::{
-    solve, solve_into, Capabilities, Diagnostics, Reason, Solution, Status, TorqueSolver,
-    WarmStart, WarmStartError,
+    solve, solve_into, solve_into_with, Capabilities, Check, Diagnostics, Reason, Solution, Status,
+    TorqueSolver, WarmStart, WarmStartError,
 };

@@ -157,6 +157,9 @@ impl fmt::Display for Reason {
 /// Physical consistency checks, computed by the core so every backend reports alike.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Diagnostics {
+    /// The core's residual check and everything below were deferred ([`Check::Lazy`]):
+    /// the fields are zero until [`TorqueQp::complete`] runs.
+    pub deferred: bool,
     /// `‖G f − w‖∞`: does the answer hold the object?
     pub wrench_residual: f64,
     /// `‖Jᵀ f − τ‖∞`: do the joints produce these forces?
@@ -301,7 +304,8 @@ pub struct Solution {
     pub active_set: Option<Vec<usize>>,
     /// Lagrange multipliers of the linear rows for `Σ w_j τ_j²` (empty if not reported).
     pub multipliers: Vec<f64>,
-    /// Wall-clock time of the solve, model already built (µs in JSON).
+    /// Wall-clock time of the solve, model already built (µs in JSON); zero under
+    /// [`Check::Lazy`].
     #[serde(rename = "solve_time_us", serialize_with = "micros")]
     pub solve_time: Duration,
     /// Residuals and margins.
@@ -392,6 +396,10 @@ pub struct Capabilities {
     pub warm_key_set: bool,
     /// Warm-starts from a torque.
     pub warm_torque: bool,
+    /// Checks every row of an answer from scratch before calling it optimal (primal
+    /// feasibility in its own coordinates, or a conic certificate), so that
+    /// [`Check::Lazy`] may defer the core's independent check.
+    pub certifies_rows: bool,
 }
 
 /// A QP backend. Built once per grasp (it may factor and cache what depends only on
@@ -415,25 +423,89 @@ pub trait TorqueSolver: Send {
     fn solve_raw(&mut self, wrench: &[f64; 6], warm: &WarmStart<'_>, out: &mut Solution);
 }
 
+/// How much of an answer the core completes and checks after the backend's solve.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum Check {
+    /// On every solve: the contact forces, σ, every residual and margin, and the core's
+    /// independent check of the physics (`G f = w`, `Jᵀ f = τ`, `C τ = e`, and the rows
+    /// and cones at f).
+    #[default]
+    Full,
+    /// The control-loop form, for a backend that certifies its rows
+    /// ([`Capabilities::certifies_rows`]). `optimal` rests on the backend's from-scratch
+    /// check of every row (torque limits included), with the core's check that σ, and
+    /// so τ, is finite. The forces, the residuals and the core's independent check wait for
+    /// [`TorqueQp::complete`] (`GraspSolver::diagnose`), which may still turn the answer
+    /// into a numerical failure. Other backends, the paper model, and answers that are
+    /// not optimal or not finite get the full check. The solve is not timed
+    /// ([`Solution::solve_time`] is zero): a control loop times its own tick.
+    Lazy,
+}
+
+impl Check {
+    /// `full` or `lazy`.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Check::Full => "full",
+            Check::Lazy => "lazy",
+        }
+    }
+}
+
+impl std::str::FromStr for Check {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "full" => Ok(Check::Full),
+            "lazy" => Ok(Check::Lazy),
+            _ => Err(format!("unknown check {s:?}: expected full or lazy")),
+        }
+    }
+}
+
+impl fmt::Display for Check {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
 /// Solves with any backend and completes the answer with forces, objective and
-/// diagnostics, then checks it. Reuses `out`'s buffers: no allocation once they have
-/// grown to size (warnings aside).
+/// diagnostics, then checks it ([`Check::Full`]). Reuses `out`'s buffers: no
+/// allocation once they have grown to size (warnings aside).
 pub fn solve_into(
     solver: &mut dyn TorqueSolver,
     wrench: &[f64; 6],
     warm: &WarmStart<'_>,
     out: &mut Solution,
 ) -> Result<(), WarmStartError> {
+    solve_into_with(solver, wrench, warm, Check::Full, out)
+}
+
+/// [`solve_into`] with the core's part chosen by `check`.
+pub fn solve_into_with(
+    solver: &mut dyn TorqueSolver,
+    wrench: &[f64; 6],
+    warm: &WarmStart<'_>,
+    check: Check,
+    out: &mut Solution,
+) -> Result<(), WarmStartError> {
     let qp = solver.problem();
     check_inputs(qp, wrench, warm)?;
-    let start = Instant::now();
+    // Two clock reads cost more than the lazy check itself on the smallest grasps.
+    let start = (check == Check::Full).then(Instant::now);
     out.warnings.clear();
     out.reason = None;
     out.multipliers.clear();
     out.internal_forces.clear();
     out.method = None;
-    let residual = qp.model.unreachable_residual(wrench);
-    if residual > qp.model.unreachable_tolerance(wrench) {
+    // Only a model with wrench directions no torque reaches has rows to test.
+    let residual = match qp.model.unreachable.nrows() {
+        0 => 0.0,
+        _ => qp.model.unreachable_residual(wrench),
+    };
+    if residual > 0.0 && residual > qp.model.unreachable_tolerance(wrench) {
         out.status = Status::Infeasible;
         out.reason = Some(Reason::UnreachableWrench { residual });
         out.torque.clear();
@@ -442,11 +514,13 @@ pub fn solve_into(
     } else {
         solver.solve_raw(wrench, warm, out);
     }
-    out.solve_time = start.elapsed();
+    out.solve_time = start.map_or(Duration::ZERO, |t| t.elapsed());
     let tol = solver.residual_tolerance();
-    let name = solver.name();
+    let lazy = check == Check::Lazy && solver.capabilities().certifies_rows;
     let qp = solver.problem();
-    qp.complete(wrench, tol, name, out);
+    if !(lazy && qp.complete_lazy(tol, out)) {
+        qp.complete(wrench, tol, solver.name(), out);
+    }
     if let Some(a) = &qp.model.actuators {
         if out.status == Status::Infeasible && a.unactuated_directions.nrows() > 0 {
             if let Some(cause) = out.reason.take() {
@@ -501,7 +575,75 @@ fn check_inputs(qp: &TorqueQp, w: &[f64; 6], warm: &WarmStart<'_>) -> Result<(),
     Ok(())
 }
 
+impl Diagnostics {
+    /// Zero, with the margins' buffer kept.
+    fn clear(&mut self) {
+        self.deferred = false;
+        self.wrench_residual = 0.0;
+        self.torque_residual = 0.0;
+        self.consistency_residual = 0.0;
+        self.max_violation = 0.0;
+        self.cone_violation = 0.0;
+        self.friction_margins.clear();
+        self.check_tolerance = 0.0;
+        self.wrench_check = 0.0;
+        self.torque_check = 0.0;
+    }
+}
+
 impl TorqueQp {
+    /// The relative tolerance of the core's checks for a backend of accuracy `tol`: an
+    /// accepted wrench may be off the reachable set by the rank decision.
+    fn check_tolerance(&self, tol: f64) -> f64 {
+        tol.max(10.0 * self.model.rank_tolerance)
+    }
+
+    /// `σ = Σ w_j τ_j²` (eq. 40).
+    fn objective(&self, tau: &[f64]) -> f64 {
+        tau.iter()
+            .zip(&self.model.weights)
+            .map(|(t, wj)| wj * t * t)
+            .sum()
+    }
+
+    /// The largest violation `c_i − H_i τ` of the torque-limit rows, and whether one
+    /// exceeds `tol` relative to its terms. A limit t is the pair of rows `±τ_j ≥ −t`
+    /// (TorqueQp::new): the larger violation of the two is `|τ_j| − t`.
+    fn limit_violation(&self, tau: &[f64], tol: f64) -> (f64, bool) {
+        let (mut viol, mut bad) = (f64::NEG_INFINITY, false);
+        for (t, lim) in tau.iter().zip(&self.model.torque_limits) {
+            if let Some(l) = *lim {
+                let v = t.abs() - l;
+                viol = viol.max(v);
+                bad |= exceeds(v, tol * (l + t.abs()));
+            }
+        }
+        (viol, bad)
+    }
+
+    /// What [`Check::Lazy`] keeps of [`Self::complete`] for an optimal answer of a
+    /// backend that certified its rows (the torque limits among them): σ, which must
+    /// be finite, so τ is. Returns false, with `out` untouched but for σ, when the full
+    /// check must run instead: an answer that is not optimal or not finite, or the
+    /// paper model (whose warning needs the residual).
+    pub fn complete_lazy(&self, tol: f64, out: &mut Solution) -> bool {
+        if !out.status.has_answer() || self.model.equilibrium == Equilibrium::PaperModel {
+            return false;
+        }
+        out.objective = self.objective(&out.torque);
+        if !out.objective.is_finite() {
+            return false;
+        }
+        let tol = self.check_tolerance(tol);
+        out.contact_forces.clear();
+        out.joint_torque.clear();
+        let d = &mut out.diagnostics;
+        d.clear();
+        d.deferred = true;
+        d.check_tolerance = tol;
+        true
+    }
+
     /// Fills forces, objective and diagnostics of `out` from its torque, and turns an
     /// answer that fails the residual check at relative tolerance `tol` into a
     /// numerical failure.
@@ -509,32 +651,21 @@ impl TorqueQp {
         let model = &*self.model;
         let n = model.force_dim();
         let d = &mut out.diagnostics;
-        d.friction_margins.clear();
+        d.clear();
         // An accepted wrench may be off the reachable set by the rank decision.
-        let tol = tol.max(10.0 * model.rank_tolerance);
+        let tol = self.check_tolerance(tol);
         d.check_tolerance = tol;
         if out.torque.is_empty() {
             out.contact_forces.clear();
             out.joint_torque.clear();
             out.objective = 0.0;
-            d.wrench_residual = 0.0;
-            d.torque_residual = 0.0;
-            d.consistency_residual = 0.0;
-            d.max_violation = 0.0;
-            d.cone_violation = 0.0;
-            d.wrench_check = 0.0;
-            d.torque_check = 0.0;
             return;
         }
         let tau = &out.torque;
         out.contact_forces.resize(n, 0.0);
         model.forces_into(w, tau, &out.internal_forces, &mut out.contact_forces);
         let f = &out.contact_forces;
-        out.objective = tau
-            .iter()
-            .zip(&model.weights)
-            .map(|(t, wj)| wj * t * t)
-            .sum();
+        out.objective = self.objective(tau);
         // Residuals are judged against the problem's own scale, so the check is the
         // same in any units: the largest contact force F (with mz counted as
         // mz/mu_torsion), seen through the row (Σ_j |a_j| · force_unit_j · F), plus the
@@ -672,15 +803,9 @@ impl TorqueQp {
             };
             vbad |= bad;
         }
-        let limits = self.rows.len() - self.contacts.last().map_or(0, |c| c.first_row + c.rows);
-        for (i, id) in self.rows.iter().enumerate().skip(self.rows.len() - limits) {
-            if let RowId::TorqueLimit { joint, upper } = *id {
-                // The row is ±e_j (TorqueQp::new).
-                let v = self.c0[i] - if upper { -tau[joint] } else { tau[joint] };
-                viol = viol.max(v);
-                vbad |= exceeds(v, tol * (self.c0[i].abs() + tau[joint].abs()));
-            }
-        }
+        let (limit, limit_bad) = self.limit_violation(tau, tol);
+        viol = viol.max(limit);
+        vbad |= limit_bad;
         d.max_violation = viol.max(0.0);
         let mut cone = 0.0f64;
         // A contact whose force is rounding noise next to the largest has no margin.

@@ -15,6 +15,7 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     free_internal_forces: false,
     warm_key_set: false,
     warm_torque: true,
+    certifies_rows: false,
 };
 
 fn backend(message: &str) -> Option<Reason> {

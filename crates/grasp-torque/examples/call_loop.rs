@@ -4,16 +4,22 @@
 //! Run: `cargo run --release -p grasp-torque --example call_loop -- FILE KIND N [exact]`
 //! with KIND one of `cold` (the backend alone from a cold start), `check` (the core's
 //! completion and residual check of that answer), `full` (`GraspSolver::solve`),
-//! `warm` (the backend from the answer for a wrench 1 % away, alternating) and `build`
+//! `lazy` (a cold solve with `Check::Lazy`), `warm` (the backend from the answer for a
+//! wrench 1 % away, alternating), `tick` and `tick-full` (`GraspSolver::resolve` on
+//! the same alternating wrenches, with `Check::Lazy` and `Check::Full`) and `build`
 //! (`GraspSolver::new`); the linear view at N = 8 unless `exact`.
 
-use grasp_torque::{solve_into, Cones, GraspSolver, Solution, SolverConfig, WarmStart};
+use grasp_torque::{
+    solve_into, solve_into_with, Check, Cones, GraspSolver, Solution, SolverConfig, WarmStart,
+};
 use std::hint::black_box;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let [_, file, kind, n, rest @ ..] = args.as_slice() else {
-        return Err("usage: call_loop FILE cold|check|full|warm|build N [exact]".into());
+        return Err(
+            "usage: call_loop FILE cold|check|full|lazy|warm|tick|tick-full|build N [exact]".into(),
+        );
     };
     let n: usize = n.parse()?;
     let mut p = grasp_torque::load(file)?.problem;
@@ -34,6 +40,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let tol = backend.residual_tolerance();
     let near: [f64; 6] = std::array::from_fn(|i| p.wrench[i] * 1.01);
     let (mut last, mut other) = (answer.clone(), Solution::default());
+    let check = if kind == "tick" {
+        Check::Lazy
+    } else {
+        Check::Full
+    };
+    let mut ticker = GraspSolver::new(&p, &config)?.with_check(check);
+    ticker.resolve(&p.wrench)?;
     for i in 0..n {
         match kind.as_str() {
             "cold" => backend.solve_raw(black_box(&p.wrench), &cold, &mut answer),
@@ -44,6 +57,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             "full" => {
                 black_box(solver.solve(black_box(&p.wrench), &cold)?.status);
+            }
+            "lazy" => {
+                solve_into_with(
+                    backend.as_mut(),
+                    black_box(&p.wrench),
+                    &cold,
+                    Check::Lazy,
+                    &mut answer,
+                )?;
+            }
+            "tick" | "tick-full" => {
+                let w = if i % 2 == 0 { &near } else { &p.wrench };
+                black_box(ticker.resolve(black_box(w))?.status);
             }
             "warm" => {
                 let w = if i % 2 == 0 { &near } else { &p.wrench };

@@ -2,7 +2,7 @@
 
 use grasp_core::cone::LinearizationError;
 use grasp_core::{
-    Capabilities, Equilibrium, GraspModel, GraspProblem, InternalForces, Linearization,
+    Capabilities, Check, Equilibrium, GraspModel, GraspProblem, InternalForces, Linearization,
     ModelOptions, SfceSpacing, TorqueQp, TorqueSolver,
 };
 use std::fmt;
@@ -212,6 +212,8 @@ pub struct Overrides {
     pub backend: Option<Backend>,
     /// The cones. Default: linear.
     pub cones: Cones,
+    /// What is checked on every solve ([`SolverConfig::check`]).
+    pub check: Check,
     /// N, sides of the inscribed polygons (the problem's own when `None`).
     pub sides: Option<usize>,
     /// K, latitudes per hemisphere of SFCe polyhedra.
@@ -244,6 +246,7 @@ impl Overrides {
         let mut config = SolverConfig {
             backend: self.backend,
             cones: self.cones,
+            check: self.check,
             ..Default::default()
         };
         if self.paper_model {
@@ -264,6 +267,10 @@ pub struct SolverConfig {
     pub backend: Option<Backend>,
     /// The cones. Default: linear.
     pub cones: Cones,
+    /// What [`crate::GraspSolver`] checks on every solve. Default: [`Check::Full`];
+    /// [`Check::Lazy`] defers the forces and residuals to
+    /// [`crate::GraspSolver::diagnose`] (the control-loop setting).
+    pub check: Check,
     /// Settings of the native backend.
     #[cfg(feature = "active-set")]
     pub active_set: grasp_active_set::ActiveSetSettings,

@@ -48,6 +48,9 @@ pub enum Error {
 /// solve with a new wrench allocates nothing once warmed up.
 pub struct GraspSolver {
     backend: Box<dyn TorqueSolver>,
+    check: Check,
+    /// The wrench of the last solve, for [`Self::diagnose`].
+    wrench: [f64; 6],
     solution: Solution,
     last_torque: Vec<f64>,
     last_active: Vec<usize>,
@@ -73,18 +76,26 @@ impl GraspSolver {
             .validate()
             .map_err(|e| ProblemError::invalid("linearization", "valid N and K", e))?;
         let qp = config.view(model, linearization);
-        Ok(Self::from_backend(config.build(qp)?))
+        Ok(Self::from_backend(config.build(qp)?).with_check(config.check))
     }
 
-    /// Wraps an already built backend.
+    /// Wraps an already built backend, with the full check on every solve.
     pub fn from_backend(backend: Box<dyn TorqueSolver>) -> Self {
         Self {
             backend,
+            check: Check::Full,
+            wrench: [0.0; 6],
             solution: Solution::default(),
             last_torque: Vec::new(),
             last_active: Vec::new(),
             has_last: false,
         }
+    }
+
+    /// The same solver with `check` on every solve.
+    pub fn with_check(mut self, check: Check) -> Self {
+        self.check = check;
+        self
     }
 
     /// The view the backend solves (its model is [`TorqueQp::model`]).
@@ -99,7 +110,14 @@ impl GraspSolver {
 
     /// Solves for `wrench` from `warm`.
     pub fn solve(&mut self, wrench: &[f64; 6], warm: &WarmStart<'_>) -> Result<&Solution, Error> {
-        solve_into(self.backend.as_mut(), wrench, warm, &mut self.solution)?;
+        solve_into_with(
+            self.backend.as_mut(),
+            wrench,
+            warm,
+            self.check,
+            &mut self.solution,
+        )?;
+        self.wrench = *wrench;
         self.remember();
         Ok(&self.solution)
     }
@@ -115,9 +133,31 @@ impl GraspSolver {
         } else {
             WarmStart::default()
         };
-        solve_into(self.backend.as_mut(), wrench, &warm, &mut self.solution)?;
+        solve_into_with(
+            self.backend.as_mut(),
+            wrench,
+            &warm,
+            self.check,
+            &mut self.solution,
+        )?;
+        self.wrench = *wrench;
         self.remember();
         Ok(&self.solution)
+    }
+
+    /// Completes what [`Check::Lazy`] deferred for the last solution: the contact forces,
+    /// the residuals and margins, and the core's independent residual check, which may
+    /// still turn the answer into a numerical failure (the next `resolve` then starts
+    /// cold). Nothing changes after a full check.
+    pub fn diagnose(&mut self) -> &Solution {
+        if self.solution.diagnostics.deferred {
+            let b = &self.backend;
+            let (tol, name) = (b.residual_tolerance(), b.name());
+            b.problem()
+                .complete(&self.wrench, tol, name, &mut self.solution);
+            self.has_last &= self.solution.is_optimal();
+        }
+        &self.solution
     }
 
     /// The last solution.

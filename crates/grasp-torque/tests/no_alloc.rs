@@ -1,7 +1,7 @@
 //! A solve with an unchanged grasp and a new wrench or warm start allocates nothing:
 //! counted with a wrapping global allocator.
 
-use grasp_torque::{load_problem, Cones, GraspSolver, SolverConfig, WarmStart};
+use grasp_torque::{load_problem, Check, Cones, GraspSolver, SolverConfig, WarmStart};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -62,10 +62,15 @@ fn solves_reuse_the_workspace(cones: Cones) {
         ))
         .unwrap();
         let mut s = GraspSolver::new(&p, &config).unwrap();
+        let mut lazy = GraspSolver::new(&p, &config)
+            .unwrap()
+            .with_check(Check::Lazy);
         let mut w = p.wrench;
         // Warm up: buffers grow to size once.
         s.solve(&w, &WarmStart::default()).unwrap();
         s.resolve(&w).unwrap();
+        lazy.resolve(&w).unwrap();
+        lazy.diagnose();
         let before = allocations();
         for k in 0..50 {
             w[k % 3] *= 1.0 + 0.002 * (k as f64).sin();
@@ -76,6 +81,11 @@ fn solves_reuse_the_workspace(cones: Cones) {
         for k in 0..50 {
             w[k % 3] *= 1.0 + 0.001 * (k as f64).cos();
             assert!(s.resolve(&w).unwrap().is_optimal());
+            // With the lazy check, and its deferred part now and then.
+            assert!(lazy.resolve(&w).unwrap().diagnostics.deferred);
+            if k % 10 == 0 {
+                assert!(lazy.diagnose().is_optimal());
+            }
         }
         assert_eq!(allocations() - before, 0, "{name} ({cones}) allocated");
     }
