@@ -207,8 +207,8 @@ class Solver:
     """A solver for one grasp, reused across wrenches (one per control loop).
 
     ``Solver(problem, backend=None, cones="linear", sides=None, latitudes=None,
-    internal_forces=None, paper_model=False, sfce_spacing=None)``: ``problem`` is a ``Problem``, a path or
-    a dict. ``backend`` is ``"active-set"`` or ``"clarabel"`` (default: the first that
+    internal_forces=None, paper_model=False, sfce_spacing=None, check="full")``:
+    ``problem`` is a ``Problem``, a path or a dict. ``backend`` is ``"active-set"`` or ``"clarabel"`` (default: the first that
     supports the cones, active-set when it can); ``cones`` is ``"linear"`` (inscribed
     polyhedra with ``sides`` = N, ``latitudes`` = K) or ``"exact"``. ``sides``,
     ``latitudes``, ``sfce_spacing`` (``"uniform"`` or ``"paper"``) and
@@ -216,6 +216,12 @@ class Solver:
 
     ``solve(wrench=None, warm=True)`` solves for ``wrench`` (the problem's when None),
     warm-started from the previous optimal answer; it returns a ``Result``.
+
+    ``check="lazy"`` is the control-loop setting: with the native backend, ``optimal``
+    rests on its own from-scratch check of every row, and the contact forces,
+    residuals and the independent residual check wait for ``diagnose()``, which
+    returns the completed ``Result`` (and may still turn it into
+    ``numerical_failure``). ``check="full"`` (the default) does all of it every solve.
     """
 
     __slots__ = ("_s", "_settings")
@@ -230,8 +236,10 @@ class Solver:
         internal_forces: Optional[str] = None,
         paper_model: bool = False,
         sfce_spacing: Optional[str] = None,
+        check: str = "full",
     ):
         settings = _settings(backend, cones, sides, latitudes, sfce_spacing, internal_forces, paper_model)
+        settings["check"] = check
         self._settings = settings
         self._s = _native.Solver(_as_problem(problem)._p, _dumps(settings))
 
@@ -244,6 +252,11 @@ class Solver:
                 )
             wrench = w.tolist()
         return self._s.solve(wrench, warm)
+
+    def diagnose(self) -> Result:
+        """The last answer with what ``check="lazy"`` deferred: forces, residuals and
+        the independent residual check."""
+        return self._s.diagnose()
 
     @property
     def problem(self) -> Problem:

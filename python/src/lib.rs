@@ -122,6 +122,7 @@ struct Settings {
     sfce_spacing: Option<String>,
     internal_forces: Option<String>,
     paper_model: Option<bool>,
+    check: Option<String>,
 }
 
 impl Settings {
@@ -139,7 +140,7 @@ impl Settings {
         Overrides {
             backend: parsed("backend", self.backend.as_deref())?,
             cones: parsed("cones", self.cones.as_deref())?.unwrap_or_default(),
-            check: Default::default(),
+            check: parsed("check", self.check.as_deref())?.unwrap_or_default(),
             sides: self.sides,
             latitudes: self.latitudes,
             sfce_spacing: match self.sfce_spacing.as_deref() {
@@ -205,6 +206,14 @@ impl Solver {
         Ok(SolveResult::new(sol, &self.problem, backend, self.cones))
     }
 
+    /// Completes what the lazy check deferred for the last answer: forces, residuals
+    /// and the core's independent check (`GraspSolver::diagnose`).
+    fn diagnose(&self) -> SolveResult {
+        let mut s = self.solver.lock().unwrap_or_else(|e| e.into_inner());
+        let backend = s.backend_name();
+        SolveResult::new(s.diagnose(), &self.problem, backend, self.cones)
+    }
+
     /// The problem as solved (overrides applied).
     fn problem(&self) -> Problem {
         Problem {
@@ -230,6 +239,9 @@ impl Solver {
 /// Residuals and margins of a solve (the Rust `Diagnostics`).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct Checks {
+    /// The lazy check deferred the rest (`diagnose` computes it).
+    #[serde(default)]
+    deferred: bool,
     wrench_residual: f64,
     torque_residual: f64,
     consistency_residual: f64,
@@ -286,7 +298,7 @@ impl SolveResult {
                 status: s.status.as_str().into(),
                 reason,
                 torque: ok.then(|| s.torque.clone()),
-                contact_forces: ok.then(|| s.contact_forces.clone()),
+                contact_forces: (ok && !d.deferred).then(|| s.contact_forces.clone()),
                 contact_dims: p.contacts.iter().map(|c| c.dim()).collect(),
                 internal_forces: s.internal_forces.clone(),
                 objective: ok.then_some(s.objective),
@@ -294,6 +306,7 @@ impl SolveResult {
                 active_set: s.active_set.clone(),
                 solve_time_us: s.solve_time.as_secs_f64() * 1e6,
                 checks: Checks {
+                    deferred: d.deferred,
                     wrench_residual: d.wrench_residual,
                     torque_residual: d.torque_residual,
                     consistency_residual: d.consistency_residual,
@@ -420,10 +433,11 @@ impl SolveResult {
         &self.data.cones
     }
 
-    /// `‖G f − w‖∞`, `‖Jᵀ f − τ‖∞` and `‖C τ − e‖∞` (None without an answer).
+    /// `‖G f − w‖∞`, `‖Jᵀ f − τ‖∞` and `‖C τ − e‖∞` (None without an answer, or
+    /// when the lazy check deferred them).
     #[getter]
     fn residuals<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        if self.data.torque.is_none() {
+        if self.data.torque.is_none() || self.data.checks.deferred {
             return Ok(None);
         }
         let c = &self.data.checks;

@@ -112,6 +112,26 @@ def test_solver_options_and_warm_solves(root):
         assert rel_close(other.objective, exact.objective, 1e-7)
 
 
+@pytest.mark.parametrize("path", fixture_files(), ids=lambda p: p.name)
+def test_lazy_check_defers_forces_until_diagnose(path):
+    full, lazy = gt.Solver(path), gt.Solver(path, check="lazy")
+    w = gt.Problem.load(path).wrench
+    for k in range(4):
+        wk = w * (1.01 if k % 2 else 1.0)
+        a, b = full.solve(wk), lazy.solve(wk)
+        assert a.status == b.status == "optimal"
+        assert np.array_equal(a.torque, b.torque) and a.objective == b.objective
+        assert b.contact_forces is None and b.residuals is None
+        assert b.diagnostics["deferred"] and not a.diagnostics["deferred"]
+        c = lazy.diagnose()
+        assert c.status == "optimal" and np.array_equal(c.contact_forces, a.contact_forces)
+        assert c.diagnostics == a.diagnostics and c.residuals == a.residuals
+    # The setting survives pickling; a wrong one names the keyword.
+    assert pickle.loads(pickle.dumps(lazy)).solve().diagnostics["deferred"]
+    with pytest.raises(ValueError, match="check"):
+        gt.Solver(path, check="sometimes")
+
+
 def test_invalid_input_raises_the_cli_message(cli, root, tmp_path):
     bad = json.loads((root / "fixtures" / "hand3-pcwf.json").read_text())
     bad["contacts"][1]["mu"] = -0.5

@@ -376,6 +376,22 @@ fn fold4(a: &[f64], init: f64, map: impl Fn(f64) -> f64, better: impl Fn(f64, f6
     pick(pick(m[1], m[0]), pick(m[3], m[2]))
 }
 
+/// Whether every entry is finite: `0 · v` is 0 for a finite v and NaN otherwise,
+/// summed in four lanes (no branch per entry).
+pub fn all_finite(a: &[f64]) -> bool {
+    let mut s = [0.0f64; 4];
+    let mut blocks = a.chunks_exact(4);
+    for b in &mut blocks {
+        for l in 0..4 {
+            s[l] += b[l] * 0.0;
+        }
+    }
+    for &v in blocks.remainder() {
+        s[0] += v * 0.0;
+    }
+    (s[0] + s[1]) + (s[2] + s[3]) == 0.0
+}
+
 /// Euclidean norm of a slice.
 #[inline]
 pub fn norm2(a: &[f64]) -> f64 {

@@ -5,7 +5,7 @@
 //! a backend calls optimal whose residuals exceed the backend's stated accuracy,
 //! relative to the problem's own scale, is reported as a numerical failure instead.
 
-use crate::matrix::{add_column_block, norm_inf};
+use crate::matrix::{add_column_block, all_finite, norm_inf};
 use crate::model::Equilibrium;
 use crate::qp::{ConeRepr, RowId, TorqueQp};
 use serde::{Serialize, Serializer};
@@ -562,13 +562,16 @@ fn check_inputs(qp: &TorqueQp, w: &[f64; 6], warm: &WarmStart<'_>) -> Result<(),
                 found: t.len(),
             });
         }
-        if let Some(index) = t.iter().position(|v| !v.is_finite()) {
+        if !all_finite(t) {
+            let index = t.iter().position(|v| !v.is_finite()).unwrap_or(0);
             return Err(WarmStartError::TorqueNotFinite { index });
         }
     }
     if let Some(a) = warm.active_set {
         let rows = qp.inequality_rows();
-        if let Some(&row) = a.iter().find(|&&r| r >= rows) {
+        // The largest index first, without a branch per entry (the control loop's path).
+        if a.iter().fold(0, |m, &r| m.max(r)) >= rows {
+            let row = a.iter().copied().find(|&r| r >= rows).unwrap_or(rows);
             return Err(WarmStartError::ActiveSetRow { row, rows });
         }
     }

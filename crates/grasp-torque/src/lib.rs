@@ -43,17 +43,20 @@ pub enum Error {
     WarmStart(#[from] WarmStartError),
 }
 
-/// A solver for one grasp, reused across wrenches: it keeps the backend's workspace,
-/// the last solution's buffers and a copy of the last answer for warm starts, so a
-/// solve with a new wrench allocates nothing once warmed up.
+/// A solver for one grasp, reused across wrenches: it keeps the backend's workspace
+/// and the last two solutions' buffers, so a solve with a new wrench allocates nothing
+/// once warmed up.
 pub struct GraspSolver {
     backend: Box<dyn TorqueSolver>,
     check: Check,
     /// The wrench of the last solve, for [`Self::diagnose`].
     wrench: [f64; 6],
-    solution: Solution,
-    last_torque: Vec<f64>,
-    last_active: Vec<usize>,
+    /// The last solution and the one before: a solve writes over the older while it
+    /// warm-starts from the last, so the warm start is never copied.
+    solutions: [Solution; 2],
+    /// Which of `solutions` is the last.
+    last: usize,
+    /// Whether the last solution is optimal, and so a warm start.
     has_last: bool,
 }
 
@@ -85,9 +88,8 @@ impl GraspSolver {
             backend,
             check: Check::Full,
             wrench: [0.0; 6],
-            solution: Solution::default(),
-            last_torque: Vec::new(),
-            last_active: Vec::new(),
+            solutions: Default::default(),
+            last: 0,
             has_last: false,
         }
     }
@@ -110,39 +112,35 @@ impl GraspSolver {
 
     /// Solves for `wrench` from `warm`.
     pub fn solve(&mut self, wrench: &[f64; 6], warm: &WarmStart<'_>) -> Result<&Solution, Error> {
-        solve_into_with(
-            self.backend.as_mut(),
-            wrench,
-            warm,
-            self.check,
-            &mut self.solution,
-        )?;
-        self.wrench = *wrench;
-        self.remember();
-        Ok(&self.solution)
+        let next = &mut self.solutions[1 - self.last];
+        solve_into_with(self.backend.as_mut(), wrench, warm, self.check, next)?;
+        Ok(self.advance(wrench))
     }
 
     /// Solves for `wrench`, warm-started from the previous optimal answer if there is one
     /// (its torque and key constraint set): the control-loop call.
     pub fn resolve(&mut self, wrench: &[f64; 6]) -> Result<&Solution, Error> {
+        let [a, b] = &mut self.solutions;
+        let (last, next) = if self.last == 0 { (&*a, b) } else { (&*b, a) };
         let warm = if self.has_last {
             WarmStart {
-                torque: Some(&self.last_torque),
-                active_set: Some(&self.last_active),
+                torque: Some(&last.torque),
+                active_set: Some(last.active_set.as_deref().unwrap_or(&[])),
             }
         } else {
             WarmStart::default()
         };
-        solve_into_with(
-            self.backend.as_mut(),
-            wrench,
-            &warm,
-            self.check,
-            &mut self.solution,
-        )?;
+        solve_into_with(self.backend.as_mut(), wrench, &warm, self.check, next)?;
+        Ok(self.advance(wrench))
+    }
+
+    /// The solve just written becomes the last.
+    fn advance(&mut self, wrench: &[f64; 6]) -> &Solution {
+        self.last = 1 - self.last;
         self.wrench = *wrench;
-        self.remember();
-        Ok(&self.solution)
+        let s = &self.solutions[self.last];
+        self.has_last = s.is_optimal();
+        s
     }
 
     /// Completes what [`Check::Lazy`] deferred for the last solution: the contact forces,
@@ -150,30 +148,18 @@ impl GraspSolver {
     /// still turn the answer into a numerical failure (the next `resolve` then starts
     /// cold). Nothing changes after a full check.
     pub fn diagnose(&mut self) -> &Solution {
-        if self.solution.diagnostics.deferred {
+        let s = &mut self.solutions[self.last];
+        if s.diagnostics.deferred {
             let b = &self.backend;
             let (tol, name) = (b.residual_tolerance(), b.name());
-            b.problem()
-                .complete(&self.wrench, tol, name, &mut self.solution);
-            self.has_last &= self.solution.is_optimal();
+            b.problem().complete(&self.wrench, tol, name, s);
+            self.has_last &= s.is_optimal();
         }
-        &self.solution
+        &self.solutions[self.last]
     }
 
     /// The last solution.
     pub fn solution(&self) -> &Solution {
-        &self.solution
-    }
-
-    fn remember(&mut self) {
-        self.has_last = self.solution.is_optimal();
-        if self.has_last {
-            self.last_torque.clear();
-            self.last_torque.extend_from_slice(&self.solution.torque);
-            self.last_active.clear();
-            if let Some(a) = &self.solution.active_set {
-                self.last_active.extend_from_slice(a);
-            }
-        }
+        &self.solutions[self.last]
     }
 }
