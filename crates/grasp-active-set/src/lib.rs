@@ -1139,10 +1139,20 @@ impl<'s> Iter<'s> {
 
     /// After a successful dual phase: the exact multipliers of the final key set, and
     /// whether they certify optimality, so that Steps 2–4 have nothing left to do. The
-    /// answer stays the iterate, whose rows the dual phase has just checked from
+    /// answer stays the iterate, whose residuals the dual phase has just computed from
     /// scratch (the key set's minimiser is the same point in exact arithmetic); s is
     /// pinned at 0, and moves no row (e = 0 in the dual phase).
     fn certify(&mut self) {
+        // The scan that ended the dual phase checked every row but the key set's own.
+        let (tol, ws) = (self.feas_tol(), &self.s.ws);
+        if ws
+            .factor
+            .rows()
+            .iter()
+            .any(|&r| r != S_ROW && ws.resid[r] < -tol)
+        {
+            return;
+        }
         self.subproblem(0.0);
         let k = self.k();
         self.s.ws.z[k] = 0.0;
