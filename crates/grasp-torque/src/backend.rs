@@ -267,9 +267,10 @@ pub struct SolverConfig {
     pub backend: Option<Backend>,
     /// The cones. Default: linear.
     pub cones: Cones,
-    /// What [`crate::GraspSolver`] checks on every solve. Default: [`Check::Full`];
-    /// [`Check::Lazy`] defers the forces and residuals to
-    /// [`crate::GraspSolver::diagnose`] (the control-loop setting).
+    /// What [`crate::GraspSolver`] and the batches check on every solve. Default:
+    /// [`Check::Full`]; [`Check::Lazy`] defers the forces and residuals to
+    /// [`crate::GraspSolver::diagnose`] (the control-loop setting; a batch's answers
+    /// then carry σ and τ only).
     pub check: Check,
     /// Settings of the native backend.
     #[cfg(feature = "active-set")]

@@ -9,7 +9,7 @@
 //! the batch.
 
 use crate::{Error, SolverConfig};
-use grasp_core::{solve_into, GraspModel, GraspProblem, Solution, TorqueSolver, WarmStart};
+use grasp_core::{solve_into_with, GraspModel, GraspProblem, Solution, TorqueSolver, WarmStart};
 use rayon::prelude::*;
 use rayon::{ThreadPool, ThreadPoolBuilder};
 use std::borrow::Cow;
@@ -217,7 +217,13 @@ impl Worker {
             } else {
                 WarmStart::default()
             };
-            match solve_into(backend.as_mut(), &w, &warm, &mut self.solution) {
+            match solve_into_with(
+                backend.as_mut(),
+                &w,
+                &warm,
+                config.check,
+                &mut self.solution,
+            ) {
                 Ok(()) => {
                     let s = &self.solution;
                     emit(k, Ok(s));

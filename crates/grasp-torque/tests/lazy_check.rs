@@ -195,3 +195,30 @@ fn backends_that_do_not_certify_their_rows_get_the_full_check() {
     assert!(!a.diagnostics.deferred);
     assert!(!a.contact_forces.is_empty());
 }
+
+#[test]
+fn batches_follow_the_configured_check() {
+    use grasp_torque::{solve_batch, BatchGrasp, BatchOptions};
+    let grasps: Vec<BatchGrasp> = problems()
+        .into_iter()
+        .map(|(_, problem)| {
+            let wrenches = (0..4).map(|k| tick(&problem.wrench, k)).collect();
+            BatchGrasp { problem, wrenches }
+        })
+        .collect();
+    let run = |check| {
+        let config = SolverConfig {
+            check,
+            ..Default::default()
+        };
+        solve_batch(&grasps, &config, &BatchOptions::default()).unwrap()
+    };
+    let (full, lazy) = (run(Check::Full), run(Check::Lazy));
+    assert_eq!(full.len(), lazy.len());
+    for (a, b) in full.iter().zip(&lazy) {
+        let (a, b) = (a.outcome.as_ref().unwrap(), b.outcome.as_ref().unwrap());
+        assert_eq!((a.status, &a.torque), (b.status, &b.torque));
+        assert_eq!(b.diagnostics.deferred, b.is_optimal());
+        assert!(!a.diagnostics.deferred);
+    }
+}
