@@ -1,8 +1,8 @@
 //! `Check::Lazy`, the control-loop setting: on every bundled grasp and reference case,
 //! linear and exact cones, a control loop with the lazy check gives the same statuses,
 //! torques and σ as one with the full check, and `diagnose` then gives the same forces
-//! and diagnostics. A backend whose answer is not finite is never `optimal`, and one
-//! whose certificate lied is caught by `diagnose`.
+//! and diagnostics; batches follow the configured check. A backend whose answer is not
+//! finite is never `optimal`, and one whose certificate lied is caught by `diagnose`.
 #![cfg(feature = "active-set")]
 
 use grasp_torque::{
