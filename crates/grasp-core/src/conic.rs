@@ -23,7 +23,7 @@
 //! the torques are scaled to `k √w_j τ_j` (the objective becomes `‖x‖²`, with k putting
 //! x in force units), the free internal forces by their force response, and a solve
 //! divides the right-hand side by its own magnitude α (the problem is homogeneous:
-//! `(w, f_min, τmax) → α(…)` gives `τ → α τ`). [`ConicForm::torque`] unscales, so the
+//! `(w, f_min, τmax) → α(…)` gives `τ → α τ`). [`ConicForm::unscale_into`] unscales, so the
 //! answer is the same in any units and at any load.
 
 use crate::contact::ContactModel;
