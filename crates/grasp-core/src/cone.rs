@@ -96,8 +96,9 @@ impl Linearization {
 pub struct InscribedCone {
     /// Face rows, one per inequality, `rows × dim`; the last row is `fz ≥ 0`.
     pub faces: Matrix,
-    /// Vertex rays with `fz = 1`, in the contact's force layout, each on the exact cone.
-    pub vertices: Vec<Vec<f64>>,
+    /// Vertex rays with `fz = 1`, one per row in the contact's force layout, each on the
+    /// exact cone.
+    pub vertices: Matrix,
 }
 
 /// A polyhedral cone that contains the exact cone of `model`: the inscribed cone at
@@ -146,42 +147,52 @@ pub fn circumscribed_cone(model: &ContactModel, lin: &Linearization) -> Inscribe
 pub fn inscribed_cone(model: &ContactModel, lin: &Linearization) -> InscribedCone {
     let n = lin.sides;
     let theta = |j: usize| 2.0 * PI * (j % n) as f64 / n as f64;
+    // The unit circle at the N angles: row j of a ring is mu times this.
+    let circle = |j: usize| {
+        let (s, c) = theta(j).sin_cos();
+        [c, s]
+    };
     match *model {
         ContactModel::Fpc => InscribedCone {
-            faces: Matrix::from_rows(&[vec![1.0]], 1),
-            vertices: vec![vec![1.0]],
+            faces: Matrix::from_rows_data(1, 1, vec![1.0]),
+            vertices: Matrix::from_rows_data(1, 1, vec![1.0]),
         },
         ContactModel::Pcwf { mu } => {
-            let ring: Vec<[f64; 2]> = (0..n)
-                .map(|j| [mu * theta(j).cos(), mu * theta(j).sin()])
-                .collect();
-            let mut rows: Vec<Vec<f64>> = (0..n)
-                .map(|j| edge_row(ring[j], ring[(j + 1) % n]))
-                .collect();
-            rows.push(vec![0.0, 0.0, 1.0]);
+            let (mut faces, mut vertices) =
+                (Vec::with_capacity(3 * (n + 1)), Vec::with_capacity(3 * n));
+            let ring = |j: usize| circle(j).map(|x| mu * x);
+            for j in 0..n {
+                let p = ring(j);
+                faces.extend_from_slice(&edge_row(p, ring(j + 1)));
+                vertices.extend_from_slice(&[p[0], p[1], 1.0]);
+            }
+            faces.extend_from_slice(&[0.0, 0.0, 1.0]);
             InscribedCone {
-                faces: Matrix::from_rows(&rows, 3),
-                vertices: ring.iter().map(|p| vec![p[0], p[1], 1.0]).collect(),
+                faces: Matrix::from_rows_data(n + 1, 3, faces),
+                vertices: Matrix::from_rows_data(n, 3, vertices),
             }
         }
         ContactModel::SfcLinear { mu, mu_torsion } => {
-            let ring: Vec<[f64; 3]> = (0..n)
-                .map(|j| [mu * theta(j).cos(), mu * theta(j).sin(), 0.0])
-                .collect();
-            let mut rows = Vec::with_capacity(2 * n + 1);
+            let ring = |j: usize| {
+                let [c, s] = circle(j);
+                [mu * c, mu * s, 0.0]
+            };
+            let mut faces = Vec::with_capacity(4 * (2 * n + 1));
             for pole in [mu_torsion, -mu_torsion] {
                 for j in 0..n {
-                    rows.push(face_row(ring[j], ring[(j + 1) % n], [0.0, 0.0, pole]));
+                    faces.extend_from_slice(&face_row(ring(j), ring(j + 1), [0.0, 0.0, pole]));
                 }
             }
-            rows.push(vec![0.0, 0.0, 1.0, 0.0]);
-            let mut vertices: Vec<Vec<f64>> =
-                ring.iter().map(|p| vec![p[0], p[1], 1.0, 0.0]).collect();
-            vertices.push(vec![0.0, 0.0, 1.0, mu_torsion]);
-            vertices.push(vec![0.0, 0.0, 1.0, -mu_torsion]);
+            faces.extend_from_slice(&[0.0, 0.0, 1.0, 0.0]);
+            let mut vertices = Vec::with_capacity(4 * (n + 2));
+            for j in 0..n {
+                let p = ring(j);
+                vertices.extend_from_slice(&[p[0], p[1], 1.0, 0.0]);
+            }
+            vertices.extend_from_slice(&[0.0, 0.0, 1.0, mu_torsion, 0.0, 0.0, 1.0, -mu_torsion]);
             InscribedCone {
-                faces: Matrix::from_rows(&rows, 4),
-                vertices,
+                faces: Matrix::from_rows_data(2 * n + 1, 4, faces),
+                vertices: Matrix::from_rows_data(n + 2, 4, vertices),
             }
         }
         ContactModel::SfcElliptic { mu, mu_torsion } => {
@@ -210,12 +221,15 @@ fn sfce_cone(mu: f64, mu_t: f64, n: usize, k: usize, spacing: SfceSpacing) -> In
             }
         })
         .collect();
-    let theta = |j: usize| 2.0 * PI * (j % n) as f64 / n as f64;
+    let circle: Vec<(f64, f64)> = (0..n)
+        .map(|j| (2.0 * PI * j as f64 / n as f64).sin_cos())
+        .collect();
     let point = |i: usize, j: usize, sign: f64| {
         let (r, z) = lat[i];
-        [r * theta(j).cos(), r * theta(j).sin(), sign * z]
+        let (s, c) = circle[j % n];
+        [r * c, r * s, sign * z]
     };
-    let mut rows = Vec::with_capacity(2 * n * k + 1);
+    let mut faces = Vec::with_capacity(4 * (2 * n * k + 1));
     for sign in [1.0, -1.0] {
         for i in 0..k {
             for j in 0..n {
@@ -229,12 +243,13 @@ fn sfce_cone(mu: f64, mu_t: f64, n: usize, k: usize, spacing: SfceSpacing) -> In
                 } else {
                     point(i + 1, j, sign)
                 };
-                rows.push(face_row(a, b, c));
+                faces.extend_from_slice(&face_row(a, b, c));
             }
         }
     }
-    rows.push(vec![0.0, 0.0, 1.0, 0.0]);
-    let mut vertices = Vec::with_capacity(2 * n * (k - 1) + n + 2);
+    faces.extend_from_slice(&[0.0, 0.0, 1.0, 0.0]);
+    let nv = 2 * n * (k - 1) + n + 2;
+    let mut vertices = Vec::with_capacity(4 * nv);
     for sign in [1.0, -1.0] {
         for i in 0..k {
             if i == 0 && sign < 0.0 {
@@ -242,29 +257,29 @@ fn sfce_cone(mu: f64, mu_t: f64, n: usize, k: usize, spacing: SfceSpacing) -> In
             }
             for j in 0..n {
                 let p = point(i, j, sign);
-                vertices.push(vec![p[0], p[1], 1.0, p[2]]);
+                vertices.extend_from_slice(&[p[0], p[1], 1.0, p[2]]);
             }
         }
-        vertices.push(vec![0.0, 0.0, 1.0, sign * mu_t]);
+        vertices.extend_from_slice(&[0.0, 0.0, 1.0, sign * mu_t]);
     }
     InscribedCone {
-        faces: Matrix::from_rows(&rows, 4),
-        vertices,
+        faces: Matrix::from_rows_data(2 * n * k + 1, 4, faces),
+        vertices: Matrix::from_rows_data(nv, 4, vertices),
     }
 }
 
 /// PCwF face through two neighbouring polygon vertices `p`, `q` of the `fz = 1` slice:
 /// the line `n·x = d` with the origin inside (`d > 0`) gives `fz − (n/d)·(fx, fy) ≥ 0`.
-fn edge_row(p: [f64; 2], q: [f64; 2]) -> Vec<f64> {
+fn edge_row(p: [f64; 2], q: [f64; 2]) -> [f64; 3] {
     let nrm = [q[1] - p[1], p[0] - q[0]];
     let d = nrm[0] * p[0] + nrm[1] * p[1];
-    vec![-nrm[0] / d, -nrm[1] / d, 1.0]
+    [-nrm[0] / d, -nrm[1] / d, 1.0]
 }
 
 /// Soft-finger face through three vertices of the `fz = 1` slice, in `(fx, fy, mz)`:
 /// the plane `n·x = d` (cross product) with the origin inside gives
 /// `fz − (n/d)·(fx, fy, mz) ≥ 0`, laid out as `[fx fy fz mz]`.
-fn face_row(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Vec<f64> {
+fn face_row(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 4] {
     let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
     let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
     let nrm = [
@@ -273,7 +288,7 @@ fn face_row(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Vec<f64> {
         u[0] * v[1] - u[1] * v[0],
     ];
     let d = nrm[0] * a[0] + nrm[1] * a[1] + nrm[2] * a[2];
-    vec![-nrm[0] / d, -nrm[1] / d, 1.0, -nrm[2] / d]
+    [-nrm[0] / d, -nrm[1] / d, 1.0, -nrm[2] / d]
 }
 
 #[cfg(test)]
@@ -391,7 +406,7 @@ mod tests {
             for s in [SfceSpacing::Paper, SfceSpacing::Uniform] {
                 for m in MODELS.iter().skip(1) {
                     let cone = inscribed_cone(m, &lin(n, k, s));
-                    for v in &cone.vertices {
+                    for v in cone.vertices.as_slice().chunks_exact(m.dim()) {
                         assert!(m.exact_margin(v, 0.0).abs() < 1e-12, "{m:?} {v:?}");
                         let vals = cone.faces.mul_vec(v);
                         assert!(vals.iter().all(|&x| x > -1e-12), "{m:?} {vals:?}");

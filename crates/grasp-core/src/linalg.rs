@@ -251,36 +251,105 @@ pub enum RankThreshold {
     Absolute(f64),
 }
 
+/// The inverse of the upper triangular `k × k` matrix with entries `r(i, j)`, row-major,
+/// by back substitution a row at a time: entry (i, j) is
+/// `(δᵢⱼ − Σ_{l=i+1..j} r(i, l) R⁻¹(l, j)) / r(i, i)`, summed in l order, with the row's
+/// entries updated together so that the sums run side by side.
+fn upper_inverse(r: impl Fn(usize, usize) -> f64, k: usize) -> Vec<f64> {
+    let mut inv = vec![0.0; k * k];
+    for i in (0..k).rev() {
+        let (head, below) = inv.split_at_mut((i + 1) * k);
+        let row = &mut head[i * k..];
+        row[i] = 1.0;
+        for l in i + 1..k {
+            let f = r(i, l);
+            for (x, y) in row[l..]
+                .iter_mut()
+                .zip(&below[(l - i - 1) * k + l..(l - i) * k])
+            {
+                *x -= f * y;
+            }
+        }
+        let d = r(i, i);
+        row[i..].iter_mut().for_each(|x| *x /= d);
+    }
+    inv
+}
+
+/// Applies the reflector `I − t u uᵀ`, `u = (head, v)`, to rows `c..` of every column
+/// of `cols` (column-major, columns of length `len`). Four columns at a time: each
+/// column's sum runs in the same order as one at a time, so the result is the same to
+/// the bit, but four independent sums hide the latency of the additions, which is what
+/// a single short dot product waits on.
+fn reflect(head: f64, v: &[f64], t: f64, cols: &mut [f64], len: usize, c: usize) {
+    let mut blocks = cols.chunks_exact_mut(4 * len);
+    for block in &mut blocks {
+        let (a, rest) = block.split_at_mut(len);
+        let (b, rest) = rest.split_at_mut(len);
+        let (d, e) = rest.split_at_mut(len);
+        let (a, b, d, e) = (&mut a[c..], &mut b[c..], &mut d[c..], &mut e[c..]);
+        let n = v.len();
+        let (a1, b1, d1, e1) = (&a[1..=n], &b[1..=n], &d[1..=n], &e[1..=n]);
+        let mut s = [-0.0f64; 4];
+        for i in 0..n {
+            s[0] += v[i] * a1[i];
+            s[1] += v[i] * b1[i];
+            s[2] += v[i] * d1[i];
+            s[3] += v[i] * e1[i];
+        }
+        for (y, si) in [a, b, d, e].into_iter().zip(s) {
+            let f = t * (head * y[0] + si);
+            y[0] -= f * head;
+            for (yi, vi) in y[1..].iter_mut().zip(v) {
+                *yi -= f * vi;
+            }
+        }
+    }
+    for col in blocks.into_remainder().chunks_exact_mut(len) {
+        let y = &mut col[c..];
+        let f = t * (head * y[0] + dot(v, &y[1..]));
+        y[0] -= f * head;
+        for (yi, vi) in y[1..].iter_mut().zip(v) {
+            *yi -= f * vi;
+        }
+    }
+}
+
 /// Householder QR of `k` columns of length `len ≥ k`, stored column-major in `w`
 /// (column c at `w[c·len..]`). On return the upper triangle of the first k rows holds
 /// R, and reflector c is `v = w[c·len + c..(c+1)·len]` below the diagonal with
 /// `v[0] = vhead[c]`, applied as `I − tau[c] v vᵀ` (tau 0: no reflection).
 fn householder(w: &mut [f64], len: usize, k: usize, vhead: &mut [f64], tau: &mut [f64]) {
     for c in 0..k {
-        let (col, later) = w[c * len..].split_at_mut(len);
-        let x = &mut col[c..];
-        let norm = dot(x, x).sqrt();
-        let alpha = if x[0] >= 0.0 { -norm } else { norm };
-        let head = x[0] - alpha;
-        // ‖v‖² with v = x − alpha e₁.
-        let vn = head * head + dot(&x[1..], &x[1..]);
-        if vn > 0.0 {
-            let t = 2.0 / vn;
-            for other in later.chunks_exact_mut(len) {
-                let y = &mut other[c..];
-                let f = t * (head * y[0] + dot(&x[1..], &y[1..]));
-                y[0] -= f * head;
-                for (yi, vi) in y[1..].iter_mut().zip(&x[1..]) {
-                    *yi -= f * vi;
-                }
-            }
-            tau[c] = t;
-            x[0] = alpha;
-        } else {
-            tau[c] = 0.0;
-        }
-        vhead[c] = head;
+        householder_step(w, len, k, c, vhead, tau);
     }
+}
+
+/// Step c of [`householder`]: the reflector of column c, applied to columns c+1..k.
+fn householder_step(
+    w: &mut [f64],
+    len: usize,
+    k: usize,
+    c: usize,
+    vhead: &mut [f64],
+    tau: &mut [f64],
+) {
+    let (col, later) = w[c * len..k * len].split_at_mut(len);
+    let x = &mut col[c..];
+    let norm = dot(x, x).sqrt();
+    let alpha = if x[0] >= 0.0 { -norm } else { norm };
+    let head = x[0] - alpha;
+    // ‖v‖² with v = x − alpha e₁.
+    let vn = head * head + dot(&x[1..], &x[1..]);
+    if vn > 0.0 {
+        let t = 2.0 / vn;
+        reflect(head, &x[1..], t, later, len, c);
+        tau[c] = t;
+        x[0] = alpha;
+    } else {
+        tau[c] = 0.0;
+    }
+    vhead[c] = head;
 }
 
 /// Q = H_0 … H_{k−1} of [`householder`]'s output, column-major len × len: the
@@ -296,65 +365,90 @@ fn explicit_q(w: &[f64], len: usize, k: usize, vhead: &[f64], tau: &[f64]) -> Ve
             continue;
         }
         let v = &w[c * len + c + 1..(c + 1) * len];
-        let (h, t) = (vhead[c], tau[c]);
-        for e in c..len {
-            let y = &mut q[e * len + c..(e + 1) * len];
-            let f = t * (h * y[0] + dot(v, &y[1..]));
-            y[0] -= f * h;
-            for (yi, vi) in y[1..].iter_mut().zip(v) {
-                *yi -= f * vi;
-            }
-        }
+        reflect(vhead[c], v, tau[c], &mut q[c * len..], len, c);
     }
     q
 }
 
-/// The fast path: Householder QR of the longer side when A has full rank by a
-/// margin (`‖R‖_F ‖R⁻¹‖_F < 1e6`, so `σ_min/σ_max > 1e-6` and no rank decision near
-/// any threshold in use is at stake); `None` otherwise. Flat buffers, one allocation
-/// each: the model of every grasp passes here, so a batch of grasps is mostly this.
-fn decompose_qr(a: &Matrix, threshold: RankThreshold) -> Option<Decomposition> {
+/// The columns of the longer side of `a`, column-major: its columns, or its rows when
+/// it is wide.
+fn longer_side(a: &Matrix) -> Vec<f64> {
     let (rows, cols) = (a.nrows(), a.ncols());
     let wide = rows < cols;
     let (len, k) = if wide { (cols, rows) } else { (rows, cols) };
-    // Column c of the longer side: a column of A, or a row of A when wide.
     let mut w = vec![0.0; len * k];
-    for c in 0..k {
-        for i in 0..len {
-            w[c * len + i] = if wide { a[(c, i)] } else { a[(i, c)] };
+    for (c, col) in w.chunks_exact_mut(len).enumerate() {
+        for (i, x) in col.iter_mut().enumerate() {
+            *x = if wide { a[(c, i)] } else { a[(i, c)] };
         }
     }
-    let (mut vhead, mut tau) = (vec![0.0; k], vec![0.0; k]);
-    householder(&mut w, len, k, &mut vhead, &mut tau);
+    w
+}
+
+/// Householder QR of `w` ([`householder`]), and `R⁻¹` (row-major) when R shows full
+/// rank by a margin: `σ_min/σ_max ≥ 1/(‖R‖_F ‖R⁻¹‖_F)` above both 1e-6 and the
+/// threshold's [`COD_MARGIN`] multiple, so that no rank decision is near. `None`
+/// otherwise.
+fn clear_full_rank_qr(
+    w: &mut [f64],
+    len: usize,
+    k: usize,
+    vhead: &mut [f64],
+    tau: &mut [f64],
+    threshold: RankThreshold,
+) -> Option<Vec<f64>> {
+    householder(w, len, k, vhead, tau);
     let r = |i: usize, j: usize| w[j * len + i];
-    // R⁻¹ (row-major, k × k) by back substitution, column by column.
-    let mut rinv = vec![0.0; k * k];
-    for j in 0..k {
-        for i in (0..=j).rev() {
-            let mut s = if i == j { 1.0 } else { 0.0 };
-            for l in i + 1..=j {
-                s -= r(i, l) * rinv[l * k + j];
-            }
-            if r(i, i) == 0.0 {
-                return None;
-            }
-            rinv[i * k + j] = s / r(i, i);
-        }
+    // cond(R) ≥ max |r_ii| / min |r_ii|: a rank-deficient A stops here.
+    let (lo, hi) = (0..k).fold((f64::INFINITY, 0.0f64), |(lo, hi), i| {
+        (lo.min(r(i, i).abs()), hi.max(r(i, i).abs()))
+    });
+    if lo * 1e6 <= hi {
+        return None;
     }
+    let rinv = upper_inverse(r, k);
     let nr = (0..k)
         .map(|j| (0..=j).map(|i| r(i, j) * r(i, j)).sum::<f64>())
         .sum::<f64>()
         .sqrt();
     let ni = dot(&rinv, &rinv).sqrt();
-    if (nr * ni).is_nan() || nr * ni >= 1e6 {
-        return None;
-    }
-    if let RankThreshold::Absolute(t) = threshold {
+    let clear = match threshold {
+        RankThreshold::Relative(t) => nr * ni < 1e6 && nr * ni * COD_MARGIN * t < 1.0,
         // σ_min ≥ 1/‖R⁻¹‖_F must clear the threshold by the same margin.
-        if 1.0 / ni <= 1e6 * t {
-            return None;
+        RankThreshold::Absolute(t) => nr * ni < 1e6 && 1.0 / ni > 1e6 * t,
+    };
+    clear.then_some(rinv)
+}
+
+/// The numerical rank of `a` as [`decompose`] decides it, without forming any basis
+/// when `a` is clearly of full rank (the QR's R alone).
+pub fn rank(a: &Matrix, threshold: RankThreshold) -> Result<usize, SvdError> {
+    let (rows, cols) = (a.nrows(), a.ncols());
+    if a.as_slice().iter().any(|x| !x.is_finite()) {
+        return Err(SvdError { rows, cols });
+    }
+    let k = rows.min(cols);
+    if k > 0 {
+        let len = rows.max(cols);
+        let mut w = longer_side(a);
+        let (mut vhead, mut tau) = (vec![0.0; k], vec![0.0; k]);
+        if clear_full_rank_qr(&mut w, len, k, &mut vhead, &mut tau, threshold).is_some() {
+            return Ok(k);
         }
     }
+    decompose(a, threshold).map(|d| d.rank())
+}
+
+/// The fast path: Householder QR of the longer side when A has full rank by a
+/// margin ([`clear_full_rank_qr`]); `None` otherwise. Flat buffers, one allocation
+/// each: the model of every grasp passes here, so a batch of grasps is mostly this.
+fn decompose_qr(a: &Matrix, threshold: RankThreshold) -> Option<Decomposition> {
+    let (rows, cols) = (a.nrows(), a.ncols());
+    let wide = rows < cols;
+    let (len, k) = if wide { (cols, rows) } else { (rows, cols) };
+    let mut w = longer_side(a);
+    let (mut vhead, mut tau) = (vec![0.0; k], vec![0.0; k]);
+    let rinv = clear_full_rank_qr(&mut w, len, k, &mut vhead, &mut tau, threshold)?;
     let q = explicit_q(&w, len, k, &vhead, &tau);
     // Columns a..b of Q (column-major) as a row-major matrix.
     let q_cols = |a: usize, b: usize| {
@@ -395,15 +489,151 @@ fn decompose_qr(a: &Matrix, threshold: RankThreshold) -> Option<Decomposition> {
     })
 }
 
+/// How far a rank decision must clear the threshold on both sides, as a factor, for
+/// the complete orthogonal decomposition to take it instead of the SVD: its bounds on
+/// the singular values are then far from any value rounding could move across.
+const COD_MARGIN: f64 = 1e3;
+
+/// The rank-deficient path: a complete orthogonal decomposition `M P = Q [R₁₁ R₁₂; 0 R₂₂]`
+/// by Householder QR with column pivoting, `R₂₂` dropped, then `[R₁₁ R₁₂]ᵀ = Z₁ L` by
+/// a second QR (Golub and Van Loan, §5.4.2), so that `M = Q₁ Lᵀ W₁ᵀ` with `W = P Z`.
+/// M is A, or Aᵀ when A is wide.
+///
+/// It decides the rank only when the decision is certain by [`COD_MARGIN`] on both
+/// sides, from bounds that hold for any pivoting: `σ_{r+1} ≤ ‖R₂₂‖_F`,
+/// `σ_r ≥ σ_min(R₁₁) ≥ 1/‖R₁₁⁻¹‖_F` and `|R₀₀| ≤ σ_max ≤ ‖A‖_F`. It is then the
+/// SVD's decision, and `None` (the SVD) otherwise. About a quarter of the SVD's work at
+/// grasp sizes, and the bases it returns span the same subspaces.
+fn decompose_cod(a: &Matrix, threshold: RankThreshold) -> Option<Decomposition> {
+    let (rows, cols) = (a.nrows(), a.ncols());
+    let wide = rows < cols;
+    let (len, k) = if wide { (cols, rows) } else { (rows, cols) };
+    let mut w = longer_side(a);
+    let fro = dot(&w, &w).sqrt();
+    let mut perm: Vec<usize> = (0..k).collect();
+    let mut norms: Vec<f64> = w.chunks_exact(len).map(|c| dot(c, c)).collect();
+    let (mut vhead, mut tau) = (vec![0.0; k], vec![0.0; k]);
+    // The threshold below which the remainder is dropped, once |R₀₀| is known.
+    let mut drop_below = 0.0;
+    let mut r = 0;
+    while r < k {
+        // Pivot: the remaining column of largest norm, recomputed exactly (k is small,
+        // and downdated norms lose accuracy exactly where the rank is decided).
+        for (c, n) in norms.iter_mut().enumerate().skip(r) {
+            let col = &w[c * len + r..(c + 1) * len];
+            *n = dot(col, col);
+        }
+        let rest: f64 = norms[r..].iter().sum();
+        if r > 0 && rest.sqrt() <= drop_below {
+            break;
+        }
+        let p = (r..k).fold(r, |b, c| if norms[c] > norms[b] { c } else { b });
+        if p != r {
+            let (lo, hi) = w.split_at_mut(p * len);
+            lo[r * len..(r + 1) * len].swap_with_slice(&mut hi[..len]);
+            perm.swap(r, p);
+            norms.swap(r, p);
+        }
+        householder_step(&mut w, len, k, r, &mut vhead, &mut tau);
+        if r == 0 {
+            let r00 = w[0].abs();
+            drop_below = match threshold {
+                RankThreshold::Relative(t) => t * r00,
+                RankThreshold::Absolute(t) => t,
+            } / COD_MARGIN;
+        }
+        r += 1;
+    }
+    if r == 0 || r == k {
+        // Zero, or of full rank but too ill-conditioned for the QR path: the SVD.
+        return None;
+    }
+    // σ_r ≥ 1/‖R₁₁⁻¹‖_F must clear the threshold's upper bound.
+    let rr = |i: usize, j: usize| w[j * len + i];
+    let rinv = upper_inverse(rr, r);
+    let sigma_r = 1.0 / dot(&rinv, &rinv).sqrt();
+    let above = match threshold {
+        RankThreshold::Relative(t) => t * fro,
+        RankThreshold::Absolute(t) => t,
+    } * COD_MARGIN;
+    if sigma_r.is_nan() || sigma_r <= above {
+        return None;
+    }
+    let q = explicit_q(&w, len, r, &vhead, &tau);
+    // [R₁₁ R₁₂]ᵀ, k × r column-major (column i is row i of R), and its QR.
+    let mut t = vec![0.0; k * r];
+    for (i, col) in t.chunks_exact_mut(k).enumerate() {
+        for (j, x) in col.iter_mut().enumerate().skip(i) {
+            *x = rr(i, j);
+        }
+    }
+    let (mut zhead, mut ztau) = (vec![0.0; r], vec![0.0; r]);
+    householder(&mut t, k, r, &mut zhead, &mut ztau);
+    let z = explicit_q(&t, k, r, &zhead, &ztau);
+    // L (r × r, upper) is the R of that QR; W = P Z, row perm[i] of W is row i of Z.
+    let l = |i: usize, j: usize| t[j * k + i];
+    let wm = |row: usize, col: usize| z[col * k + row];
+    let mut pinv = vec![0; k];
+    for (i, &p) in perm.iter().enumerate() {
+        pinv[p] = i;
+    }
+    let w_of = |orig: usize, col: usize| wm(pinv[orig], col);
+    let q_of = |i: usize, col: usize| q[col * len + i];
+    Some(if wide {
+        // Aᵀ = Q₁ Lᵀ W₁ᵀ: A = W₁ L Q₁ᵀ, so A x = b ⇔ Q₁ᵀ x = L⁻¹ W₁ᵀ b.
+        let mut tr = Matrix::from_fn(r, rows, |i, j| w_of(j, i));
+        for i in (0..r).rev() {
+            for l2 in i + 1..r {
+                let f = l(i, l2);
+                for j in 0..rows {
+                    tr[(i, j)] -= f * tr[(l2, j)];
+                }
+            }
+            let d = l(i, i);
+            for j in 0..rows {
+                tr[(i, j)] /= d;
+            }
+        }
+        Decomposition {
+            row_basis: Matrix::from_fn(cols, r, q_of),
+            row_transform: tr,
+            null_basis: Matrix::from_fn(cols, cols - r, |i, j| q_of(i, r + j)),
+            left_null: Matrix::from_fn(rows, rows - r, |i, j| w_of(i, r + j)),
+        }
+    } else {
+        // A = Q₁ Lᵀ W₁ᵀ: A x = b ⇔ W₁ᵀ x = L⁻ᵀ Q₁ᵀ b (b in the range).
+        let mut tr = Matrix::from_fn(r, rows, |i, j| q_of(j, i));
+        for i in 0..r {
+            for l2 in 0..i {
+                let f = l(l2, i);
+                for j in 0..rows {
+                    tr[(i, j)] -= f * tr[(l2, j)];
+                }
+            }
+            let d = l(i, i);
+            for j in 0..rows {
+                tr[(i, j)] /= d;
+            }
+        }
+        Decomposition {
+            row_basis: Matrix::from_fn(cols, r, w_of),
+            row_transform: tr,
+            null_basis: Matrix::from_fn(cols, cols - r, |i, j| w_of(i, r + j)),
+            left_null: Matrix::from_fn(rows, rows - r, |i, j| q_of(i, r + j)),
+        }
+    })
+}
+
 /// The decomposition the model needs, with the rank decided by `threshold`: by QR
-/// when A is clearly of full rank, else by the SVD.
+/// when A is clearly of full rank, by a complete orthogonal decomposition when its
+/// rank is clearly below full, else by the SVD.
 pub fn decompose(a: &Matrix, threshold: RankThreshold) -> Result<Decomposition, SvdError> {
     let (rows, cols) = (a.nrows(), a.ncols());
     if a.as_slice().iter().any(|x| !x.is_finite()) {
         return Err(SvdError { rows, cols });
     }
     if rows > 0 && cols > 0 {
-        if let Some(d) = decompose_qr(a, threshold) {
+        if let Some(d) = decompose_qr(a, threshold).or_else(|| decompose_cod(a, threshold)) {
             return Ok(d);
         }
     }
@@ -523,6 +753,126 @@ mod tests {
             assert!(an.as_slice().iter().all(|x| x.abs() < 1e-12));
             let la = fast.left_null.transpose().matmul(&a);
             assert!(la.as_slice().iter().all(|x| x.abs() < 1e-12));
+        }
+    }
+
+    /// Orthonormal columns, to rounding.
+    fn assert_orthonormal(q: &Matrix) {
+        let qtq = q.transpose().matmul(q);
+        for i in 0..q.ncols() {
+            for j in 0..q.ncols() {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((qtq[(i, j)] - want).abs() < 1e-14, "QᵀQ {i} {j}");
+            }
+        }
+    }
+
+    /// The complete orthogonal decomposition of rank-deficient matrices, tall, wide and
+    /// square, with zero and repeated columns: the SVD's rank and pseudo-inverse,
+    /// orthonormal bases of the four subspaces, and `A x = b ⇔ row_basisᵀ x =
+    /// row_transform b` on the range.
+    #[test]
+    fn cod_matches_the_svd_on_rank_deficient_matrices() {
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        for (rows, cols, rank) in [
+            (10, 12, 9),
+            (12, 10, 7),
+            (26, 18, 15),
+            (8, 20, 5),
+            (9, 9, 4),
+            (6, 6, 1),
+        ] {
+            // A = B C with B rows × rank and C rank × cols, scaled over four decades.
+            let b = Matrix::from_fn(rows, rank, |_, _| next());
+            let c = Matrix::from_fn(rank, cols, |i, _| next() * 10f64.powi(i as i32 % 4));
+            let mut a = b.matmul(&c);
+            for i in 0..rows {
+                a[(i, cols / 2)] = 0.0;
+            }
+            let thr = RankThreshold::Relative(1e-9);
+            let d = decompose_cod(&a, thr).expect("a clear rank decision");
+            let s = svd(&a).unwrap();
+            assert_eq!(d.rank(), s.rank(1e-9), "{rows}×{cols}");
+            assert_eq!(d.rank(), rank);
+            let (p, q) = (d.pseudo_inverse(), s.pseudo_inverse(1e-9));
+            let scale = q.max_abs();
+            for (x, y) in p.as_slice().iter().zip(q.as_slice()) {
+                assert!((x - y).abs() < 1e-11 * scale, "{rows}×{cols}: {x} vs {y}");
+            }
+            for basis in [&d.row_basis, &d.null_basis, &d.left_null] {
+                assert_orthonormal(basis);
+            }
+            assert_eq!(d.null_basis.ncols(), cols - rank);
+            assert_eq!(d.left_null.ncols(), rows - rank);
+            let tol = 1e-13 * a.max_abs() * (rows.max(cols) as f64);
+            let an = a.matmul(&d.null_basis);
+            assert!(an.as_slice().iter().all(|x| x.abs() < tol), "A N");
+            let la = d.left_null.transpose().matmul(&a);
+            assert!(la.as_slice().iter().all(|x| x.abs() < tol), "U⊥ᵀ A");
+            // x = A⁺ b for b = A x0: row_basisᵀ x = row_transform b.
+            let x0: Vec<f64> = (0..cols).map(|_| next()).collect();
+            let bv = a.mul_vec(&x0);
+            let x = p.mul_vec(&bv);
+            let lhs = d.row_basis.transpose().mul_vec(&x);
+            let rhs = d.row_transform.mul_vec(&bv);
+            for (l, r) in lhs.iter().zip(&rhs) {
+                assert!((l - r).abs() < 1e-11 * (1.0 + r.abs()), "{l} vs {r}");
+            }
+            let back = a.mul_vec(&x);
+            for (u, v) in back.iter().zip(&bv) {
+                assert!((u - v).abs() < 1e-11 * (1.0 + v.abs()), "A A⁺ b");
+            }
+        }
+    }
+
+    /// A loose relative tolerance is the SVD's decision too: σ_min/σ_max = 1e-5 is full
+    /// rank at 1e-9 (by QR) but not at 1e-4, where the QR path used to answer full rank.
+    #[test]
+    fn full_rank_by_qr_only_when_clear_of_the_tolerance() {
+        let a = Matrix::from_fn(7, 4, |i, j| {
+            let base = (i as f64 - 3.0).powi(j as i32);
+            if j == 3 {
+                // Column 3 = column 1 plus a 1e-5 part off the others' span.
+                (i as f64 - 3.0) + 1e-5 * (i as f64 - 3.0).powi(3)
+            } else {
+                base
+            }
+        });
+        let s = svd(&a).unwrap();
+        for tol in [1e-9, 1e-4, 1e-3] {
+            let thr = RankThreshold::Relative(tol);
+            let want = s.rank(tol);
+            assert_eq!(decompose(&a, thr).unwrap().rank(), want, "{tol}");
+            assert_eq!(rank(&a, thr).unwrap(), want, "{tol}");
+        }
+        assert_eq!(s.rank(1e-9), 4);
+        assert_eq!(s.rank(1e-4), 3);
+    }
+
+    /// A rank decision near the threshold goes to the SVD; a clear one does not.
+    #[test]
+    fn cod_declines_a_rank_decision_near_the_threshold() {
+        // Rank 3 in 6 × 4: two components of size 1 and one of size 1e-9.
+        let u = |i: usize, l: usize| (i as f64 - 2.5).powi(l as i32);
+        let v = |j: usize, l: usize| (j as f64 + 1.0).powi(l as i32);
+        let size = [1.0, 1.0, 1e-9];
+        let a = Matrix::from_fn(6, 4, |i, j| {
+            (0..3).map(|l| size[l] * u(i, l) * v(j, l)).sum()
+        });
+        assert_eq!(svd(&a).unwrap().rank(2e-13), 3);
+        for (tol, taken, rank) in [(1e-9, false, 0), (1e-5, true, 2), (2e-13, true, 3)] {
+            let d = decompose_cod(&a, RankThreshold::Relative(tol));
+            assert_eq!(d.is_some(), taken, "tolerance {tol}");
+            if let Some(d) = d {
+                assert_eq!(d.rank(), rank);
+                assert_eq!(svd(&a).unwrap().rank(tol), rank);
+            }
         }
     }
 

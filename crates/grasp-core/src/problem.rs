@@ -466,14 +466,18 @@ fn validate_transmission(t: &Transmission, m: usize) -> Result<(), ProblemError>
         .map(|j| (0..m).map(|i| t.matrix[(i, j)].powi(2)).sum::<f64>().sqrt())
         .collect();
     let unit = Matrix::from_fn(m, a, |i, j| t.matrix[(i, j)] / norms[j]);
-    let s = crate::linalg::svd(&unit).map_err(|_| {
+    // The SVD's rank decision, from the QR's R alone when T is clearly of full rank.
+    let rank = crate::linalg::rank(
+        &unit,
+        crate::linalg::RankThreshold::Relative(TRANSMISSION_RANK_TOLERANCE),
+    )
+    .map_err(|_| {
         ProblemError::invalid(
             "transmission",
             "finite entries",
             "an SVD that did not converge",
         )
     })?;
-    let rank = s.rank(TRANSMISSION_RANK_TOLERANCE);
     if rank < a {
         return Err(ProblemError::invalid(
             "transmission",

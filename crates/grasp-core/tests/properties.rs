@@ -68,7 +68,7 @@ proptest! {
     #[test]
     fn vertices_lie_on_the_exact_cone(m in model(), l in lin()) {
         let cone = inscribed_cone(&m, &l);
-        for v in &cone.vertices {
+        for v in cone.vertices.as_slice().chunks_exact(m.dim()) {
             prop_assert!((m.gauge(v) - 1.0).abs() < 1e-12);
             let worst = cone.faces.mul_vec(v).into_iter().fold(f64::INFINITY, f64::min);
             prop_assert!(worst > -1e-12);
