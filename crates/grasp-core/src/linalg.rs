@@ -9,6 +9,12 @@
 //! factors that reconstruct A to rounding (the reason faer's SVD was preferred over
 //! nalgebra's earlier; `cargo bench -p grasp-torque --bench decomposition` compares).
 //! Dropping faer also removed the largest part of the build.
+//!
+//! The model calls [`decompose`], which takes the SVD only when a rank decision is close
+//! to its threshold: a Householder QR answers when A is clearly of full rank, and a
+//! complete orthogonal decomposition (QR with column pivoting) when its rank is clearly
+//! lower, as for grasps whose `[G; Jᵀ]` has passive internal forces. Both decide the rank
+//! exactly as the SVD would, from bounds on the singular values.
 
 use crate::matrix::Matrix;
 
@@ -198,8 +204,9 @@ pub fn svd(a: &Matrix) -> Result<Svd, SvdError> {
     Ok(Svd { u, s, v })
 }
 
-/// What the model needs of a matrix A (rows × cols) of rank r, from either a QR
-/// factorisation (the fast path, when A is clearly of full rank) or the SVD:
+/// What the model needs of a matrix A (rows × cols) of rank r, from a QR factorisation
+/// (the fast path, when A is clearly of full rank), a complete orthogonal
+/// decomposition (when its rank is clearly lower) or the SVD:
 ///
 /// - `A x = b` for a b in the range of A ⇔ `row_basisᵀ x = row_transform · b`;
 /// - `A⁺ = row_basis · row_transform`;

@@ -1,8 +1,9 @@
 //! Property tests: inscribed cones lie inside the exact cones, vertices lie on them,
-//! and the pseudo-inverse satisfies `A Z A = A`.
+//! the pseudo-inverse satisfies `A Z A = A`, and the model's decomposition (QR,
+//! complete orthogonal or SVD) is the SVD's.
 
 use grasp_core::cone::{inscribed_cone, Linearization, SfceSpacing};
-use grasp_core::linalg::svd;
+use grasp_core::linalg::{decompose, rank, svd, RankThreshold};
 use grasp_core::{ContactModel, Matrix};
 use proptest::prelude::*;
 
@@ -88,6 +89,51 @@ proptest! {
         let tol = 1e3 * f64::EPSILON * (rows.max(cols) as f64) * a.max_abs() ;
         for (x, y) in aza.as_slice().iter().zip(a.as_slice()) {
             prop_assert!((x - y).abs() <= tol, "{x} vs {y}");
+        }
+    }
+
+    /// [`decompose`] on rank-deficient and full-rank matrices of every shape, with
+    /// columns scaled over six decades: the SVD's rank (by [`rank`] too), its
+    /// pseudo-inverse, and orthonormal bases of the four subspaces with `A N = 0` and
+    /// `U⊥ᵀ A = 0`. The tolerance scales with ε, the size and ‖A‖ over σ_r.
+    #[test]
+    fn decompose_is_the_svd(rows in 1usize..14, cols in 1usize..14, r in 0usize..14,
+                            decades in 0i32..6,
+                            seed in prop::collection::vec(-1.0f64..1.0, 2 * 14 * 14)) {
+        let r = r.min(rows).min(cols);
+        let b = Matrix::from_fn(rows, r, |i, j| seed[i * 14 + j]);
+        let c = Matrix::from_fn(r, cols, |i, j| seed[196 + i * 14 + j] * 10f64.powi((j as i32 * decades) / cols.max(1) as i32));
+        let a = b.matmul(&c);
+        let thr = RankThreshold::Relative(1e-9);
+        let d = decompose(&a, thr).unwrap();
+        let s = svd(&a).unwrap();
+        let want = s.rank(1e-9);
+        prop_assert_eq!(d.rank(), want);
+        prop_assert_eq!(rank(&a, thr).unwrap(), want);
+        prop_assert_eq!(d.null_basis.ncols(), cols - want);
+        prop_assert_eq!(d.left_null.ncols(), rows - want);
+        let n = rows.max(cols) as f64;
+        let amax = a.max_abs().max(f64::MIN_POSITIVE);
+        for q in [&d.row_basis, &d.null_basis, &d.left_null] {
+            let qtq = q.transpose().matmul(q);
+            for i in 0..q.ncols() {
+                for j in 0..q.ncols() {
+                    let e = if i == j { 1.0 } else { 0.0 };
+                    prop_assert!((qtq[(i, j)] - e).abs() <= 1e2 * f64::EPSILON * n);
+                }
+            }
+        }
+        let tol = 1e2 * f64::EPSILON * n * amax;
+        prop_assert!(a.matmul(&d.null_basis).as_slice().iter().all(|x| x.abs() <= tol));
+        prop_assert!(d.left_null.transpose().matmul(&a).as_slice().iter().all(|x| x.abs() <= tol));
+        if want > 0 {
+            // Both pseudo-inverses are accurate to ε κ/σ_r, κ = σ_max/σ_r.
+            let (p, q) = (d.pseudo_inverse(), s.pseudo_inverse(1e-9));
+            let kappa = s.s[0] / s.s[want - 1];
+            let ptol = 1e3 * f64::EPSILON * n * kappa / s.s[want - 1];
+            for (x, y) in p.as_slice().iter().zip(q.as_slice()) {
+                prop_assert!((x - y).abs() <= ptol, "{} vs {} (tolerance {})", x, y, ptol);
+            }
         }
     }
 }
