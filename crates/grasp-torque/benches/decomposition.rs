@@ -1,12 +1,14 @@
 //! The project's one-sided Jacobi SVD against nalgebra's for the pseudo-inverse at
 //! grasp sizes (A = [G; Jᵀ] is 10 × 8 for the paper example, 26 × 18 for the 5-finger
 //! mixed hand), and their accuracy, which decides. (faer, used before, reached the
-//! same accuracy as Jacobi; it was dropped for its build time.)
+//! same accuracy as Jacobi; it was dropped for its build time.) `decompose` is what the
+//! model runs: a QR when A is clearly of full rank, a complete orthogonal decomposition
+//! when its rank is clearly lower (the paper example), the SVD otherwise.
 //!
 //! Run: `cargo bench -p grasp-torque --bench decomposition`. Figures are in docs/benchmarks.md.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use grasp_torque::linalg::svd;
+use grasp_torque::linalg::{decompose, svd, RankThreshold};
 use grasp_torque::{load_problem, Matrix};
 use std::hint::black_box;
 
@@ -37,6 +39,13 @@ fn nalgebra_pinv(a: &Matrix) -> Matrix {
     Matrix::from_fn(a.ncols(), a.nrows(), |i, j| p[(i, j)])
 }
 
+/// The pseudo-inverse through [`decompose`], with the model's rank tolerance.
+fn model_pinv(a: &Matrix) -> Matrix {
+    decompose(a, RankThreshold::Relative(1e-9))
+        .unwrap()
+        .pseudo_inverse()
+}
+
 fn pinv(c: &mut Criterion) {
     let mut g = c.benchmark_group("pseudo-inverse");
     for name in ["paper-example", "hand5-mixed"] {
@@ -46,6 +55,9 @@ fn pinv(c: &mut Criterion) {
         // range A and the null space).
         g.bench_function(BenchmarkId::new(format!("jacobi-{r}x{k}"), name), |b| {
             b.iter(|| black_box(svd(black_box(&a)).unwrap().pseudo_inverse(1e-9)))
+        });
+        g.bench_function(BenchmarkId::new(format!("decompose-{r}x{k}"), name), |b| {
+            b.iter(|| black_box(model_pinv(black_box(&a))))
         });
         // nalgebra's (thin) SVD: faster, but see the accuracy report below.
         g.bench_function(BenchmarkId::new(format!("nalgebra-{r}x{k}"), name), |b| {
@@ -72,8 +84,9 @@ fn pinv(c: &mut Criterion) {
     for (n, a) in &cases {
         let ours = svd(a).unwrap().pseudo_inverse(1e-9);
         eprintln!(
-            "  {n:<32} jacobi {:.1e}   nalgebra {:.1e}",
+            "  {n:<32} jacobi {:.1e}   decompose {:.1e}   nalgebra {:.1e}",
             aza_error(a, &ours),
+            aza_error(a, &model_pinv(a)),
             aza_error(a, &nalgebra_pinv(a))
         );
     }
