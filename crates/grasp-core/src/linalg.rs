@@ -501,6 +501,24 @@ fn decompose_qr(a: &Matrix, threshold: RankThreshold) -> Option<Decomposition> {
 /// the singular values are then far from any value rounding could move across.
 const COD_MARGIN: f64 = 1e3;
 
+/// Solves `T X = B` in place (`b` holds B on entry, X on return), T triangular with
+/// entries `t(i, j)`: upper by back substitution, lower by forward substitution.
+fn solve_triangular(b: &mut Matrix, t: impl Fn(usize, usize) -> f64, upper: bool) {
+    let (r, c) = (b.nrows(), b.ncols());
+    for step in 0..r {
+        let i = if upper { r - 1 - step } else { step };
+        let solved = if upper { i + 1..r } else { 0..i };
+        for l in solved {
+            let f = t(i, l);
+            for j in 0..c {
+                b[(i, j)] -= f * b[(l, j)];
+            }
+        }
+        let d = t(i, i);
+        b.row_mut(i).iter_mut().for_each(|v| *v /= d);
+    }
+}
+
 /// The rank-deficient path: a complete orthogonal decomposition `M P = Q [R₁₁ R₁₂; 0 R₂₂]`
 /// by Householder QR with column pivoting, `R₂₂` dropped, then `[R₁₁ R₁₂]ᵀ = Z₁ L` by
 /// a second QR (Golub and Van Loan, §5.4.2), so that `M = Q₁ Lᵀ W₁ᵀ` with `W = P Z`.
@@ -590,18 +608,7 @@ fn decompose_cod(a: &Matrix, threshold: RankThreshold) -> Option<Decomposition> 
     Some(if wide {
         // Aᵀ = Q₁ Lᵀ W₁ᵀ: A = W₁ L Q₁ᵀ, so A x = b ⇔ Q₁ᵀ x = L⁻¹ W₁ᵀ b.
         let mut tr = Matrix::from_fn(r, rows, |i, j| w_of(j, i));
-        for i in (0..r).rev() {
-            for l2 in i + 1..r {
-                let f = l(i, l2);
-                for j in 0..rows {
-                    tr[(i, j)] -= f * tr[(l2, j)];
-                }
-            }
-            let d = l(i, i);
-            for j in 0..rows {
-                tr[(i, j)] /= d;
-            }
-        }
+        solve_triangular(&mut tr, l, true);
         Decomposition {
             row_basis: Matrix::from_fn(cols, r, q_of),
             row_transform: tr,
@@ -611,18 +618,7 @@ fn decompose_cod(a: &Matrix, threshold: RankThreshold) -> Option<Decomposition> 
     } else {
         // A = Q₁ Lᵀ W₁ᵀ: A x = b ⇔ W₁ᵀ x = L⁻ᵀ Q₁ᵀ b (b in the range).
         let mut tr = Matrix::from_fn(r, rows, |i, j| q_of(j, i));
-        for i in 0..r {
-            for l2 in 0..i {
-                let f = l(l2, i);
-                for j in 0..rows {
-                    tr[(i, j)] -= f * tr[(l2, j)];
-                }
-            }
-            let d = l(i, i);
-            for j in 0..rows {
-                tr[(i, j)] /= d;
-            }
-        }
+        solve_triangular(&mut tr, |i, j| l(j, i), false);
         Decomposition {
             row_basis: Matrix::from_fn(cols, r, w_of),
             row_transform: tr,
