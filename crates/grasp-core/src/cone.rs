@@ -160,10 +160,9 @@ pub fn inscribed_cone(model: &ContactModel, lin: &Linearization) -> InscribedCon
         ContactModel::Pcwf { mu } => {
             let (mut faces, mut vertices) =
                 (Vec::with_capacity(3 * (n + 1)), Vec::with_capacity(3 * n));
-            let ring = |j: usize| circle(j).map(|x| mu * x);
-            for j in 0..n {
-                let p = ring(j);
-                faces.extend_from_slice(&edge_row(p, ring(j + 1)));
+            let ring: Vec<[f64; 2]> = (0..n).map(|j| circle(j).map(|x| mu * x)).collect();
+            for (j, p) in ring.iter().enumerate() {
+                faces.extend_from_slice(&edge_row(*p, ring[(j + 1) % n]));
                 vertices.extend_from_slice(&[p[0], p[1], 1.0]);
             }
             faces.extend_from_slice(&[0.0, 0.0, 1.0]);
@@ -173,20 +172,25 @@ pub fn inscribed_cone(model: &ContactModel, lin: &Linearization) -> InscribedCon
             }
         }
         ContactModel::SfcLinear { mu, mu_torsion } => {
-            let ring = |j: usize| {
-                let [c, s] = circle(j);
-                [mu * c, mu * s, 0.0]
-            };
+            let ring: Vec<[f64; 3]> = (0..n)
+                .map(|j| {
+                    let [c, s] = circle(j);
+                    [mu * c, mu * s, 0.0]
+                })
+                .collect();
             let mut faces = Vec::with_capacity(4 * (2 * n + 1));
             for pole in [mu_torsion, -mu_torsion] {
                 for j in 0..n {
-                    faces.extend_from_slice(&face_row(ring(j), ring(j + 1), [0.0, 0.0, pole]));
+                    faces.extend_from_slice(&face_row(
+                        ring[j],
+                        ring[(j + 1) % n],
+                        [0.0, 0.0, pole],
+                    ));
                 }
             }
             faces.extend_from_slice(&[0.0, 0.0, 1.0, 0.0]);
             let mut vertices = Vec::with_capacity(4 * (n + 2));
-            for j in 0..n {
-                let p = ring(j);
+            for p in &ring {
                 vertices.extend_from_slice(&[p[0], p[1], 1.0, 0.0]);
             }
             vertices.extend_from_slice(&[0.0, 0.0, 1.0, mu_torsion, 0.0, 0.0, 1.0, -mu_torsion]);
