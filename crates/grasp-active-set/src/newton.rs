@@ -21,6 +21,9 @@
 //! (where g is not differentiable), or a guess that does not converge, is left to the
 //! interior-point method.
 //!
+//! Once Newton's steps shrink quadratically, the last ones are chord steps on the
+//! current factors (Shamanskii's variant): the factors would barely change.
+//!
 //! A warm re-solve with the same pieces keeps the last factorisation and runs chord
 //! iterations on it, through the KKT matrix's explicit inverse, built once per
 //! factorisation: a control loop pays O((k + nc)²) per iteration.
@@ -296,7 +299,7 @@ impl Newton {
         }
         for change in 0..MAX_CHANGES {
             let end = match (hot && change == 0, self.frozen) {
-                (true, Some(nc)) => match self.chord(nc) {
+                (true, Some(nc)) => match self.chord(nc, true, f64::INFINITY) {
                     Step::Converged => Step::Converged,
                     _ => self.newton(),
                 },
@@ -512,11 +515,15 @@ impl Newton {
     /// Chord iterations: the KKT residual at the current point, solved with the frozen
     /// factors of the last Newton step (`nc` constraints, same owners). Its fixed point
     /// is the KKT point of the current guess; it converges linearly, at the rate of the
-    /// change in H and C since the factorisation (small after a small wrench change),
-    /// each iteration O(k² + nc·k).
-    fn chord(&mut self, nc: usize) -> Step {
+    /// change in H and C since the factorisation (small after a small wrench change,
+    /// or once Newton's steps shrink quadratically), each iteration O(k² + nc·k).
+    ///
+    /// `explicit`: through the KKT matrix's inverse (for a control loop, which re-solves
+    /// on the same factors many times); otherwise through the factors. `previous`: the
+    /// step before the first (the Newton step that produced the factors; infinite if
+    /// none), against which the first step's contraction is measured.
+    fn chord(&mut self, nc: usize, explicit: bool, mut previous: f64) -> Step {
         let n = self.n;
-        let mut previous = f64::INFINITY;
         for _ in 0..MAX_NEWTON {
             self.iterations += 1;
             // Only the constraints' slacks enter the residual (the caller computes
@@ -563,7 +570,11 @@ impl Newton {
                     }
                 }
             }
-            self.apply_kkt_inverse(nc);
+            if explicit {
+                self.apply_kkt_inverse(nc);
+            } else {
+                self.solve_kkt(nc);
+            }
             for r in 0..nc {
                 match self.owner[r] {
                     Owner::Row(i) => self.nu_row[i] += self.nu[r],
@@ -577,28 +588,59 @@ impl Newton {
                 return Step::Failed;
             }
             // Linear convergence at rate ρ leaves an error of about ρ/(1−ρ) × the step:
-            // stop when that is below CHORD_ERROR (or the step itself is).
-            let (step, scale) = (norm_inf(&self.dx), norm_inf(&self.y).max(1.0));
-            // (No rate before a second step: the first has nothing to compare with.)
+            // stop when that is below CHORD_ERROR (or the step itself is). Steps are
+            // relative to their variables (floored at 1, the scaled problem's size).
+            // Within Newton's method they count the multipliers' too: those start from
+            // the polyhedra's and can still be moving when the primal has settled, and
+            // the certificate's stationarity reads them. (A hot start begins at a
+            // converged pair.)
+            let mut step = norm_inf(&self.dx) / norm_inf(&self.y).max(1.0);
+            if !explicit {
+                step = step.max(self.multiplier_step(nc, &self.nu));
+            }
+            // (No rate before a second step, unless Newton's step came before it.)
             let rate = if previous.is_finite() {
                 step / previous
             } else {
                 f64::NAN
             };
+            let previous_step = previous;
             previous = step;
             let settled =
-                rate.is_finite() && rate < 0.5 && step * rate / (1.0 - rate) <= CHORD_ERROR * scale;
-            if step <= CHORD_ERROR * scale || settled {
+                rate.is_finite() && rate < 0.5 && step * rate / (1.0 - rate) <= CHORD_ERROR;
+            if step <= CHORD_ERROR || settled {
                 return Step::Converged;
+            }
+            // Within Newton's method, a measured contraction this slow means fresh
+            // factors are cheaper than more chord steps.
+            if !explicit && step > 0.25 * previous_step {
+                return Step::Failed;
             }
         }
         Step::Failed
+    }
+
+    /// The largest change `d` of the first `nc` constraints' multipliers, relative to
+    /// the largest multiplier (at least 1, like the scaled problem's variables).
+    fn multiplier_step(&self, nc: usize, d: &[f64]) -> f64 {
+        let (mut step, mut size) = (0.0f64, 1.0f64);
+        for (r, d) in d[..nc].iter().enumerate() {
+            let nu = match self.owner[r] {
+                Owner::Row(i) => self.nu_row[i],
+                Owner::Cone(k) => self.nu_cone[k],
+            };
+            step = step.max(d.abs());
+            size = size.max(nu.abs());
+        }
+        step / size
     }
 
     /// Newton's method on the current guess.
     fn newton(&mut self) -> Step {
         let n = self.n;
         let (mut last_step, mut before_last) = (f64::INFINITY, f64::INFINITY);
+        // The last step of the primal and dual variables together.
+        let mut last_pair = f64::INFINITY;
         // The factors below replace the frozen ones.
         self.kkt_inverse_valid = false;
         for it in 0..MAX_NEWTON {
@@ -720,7 +762,10 @@ impl Newton {
                     Owner::Row(i) => &mut self.nu_row[i],
                     Owner::Cone(k) => &mut self.nu_cone[k],
                 };
-                *old += alpha * (self.nu[r] - *old);
+                let d = alpha * (self.nu[r] - *old);
+                // (`nu` keeps the change, for the multipliers' step below.)
+                self.nu[r] = d;
+                *old += d;
             }
             for d in self.dx.iter_mut() {
                 *d *= alpha;
@@ -744,6 +789,13 @@ impl Newton {
                 self.frozen = Some(nc);
                 return Step::Converged;
             }
+            let pair = (step / scale).max(self.multiplier_step(nc, &self.nu));
+            let contraction = if previous.is_finite() && last_pair.is_finite() {
+                (step / previous).max(pair / last_pair)
+            } else {
+                f64::INFINITY
+            };
+            last_pair = pair;
             // A clearly negative multiplier: this guess is wrong, change it now. After
             // the first step only one far below zero counts (a tenth of the largest:
             // the start's multipliers came from the polyhedra), after that any below
@@ -759,6 +811,22 @@ impl Newton {
                 let bar = if it == 0 { 0.1 } else { 1e-6 };
                 if (0..nc).any(|r| stored(r) < -bar * numax) {
                     return Step::Negative;
+                }
+            }
+            // Settling quadratically (a full step a twentieth of the last or less): the
+            // factors would barely change, so the rest is chord steps on these
+            // (Shamanskii's variant), each O(k² + nc·k) instead of a factorisation.
+            // After Newton's step s_j the error is about the first chord step c, and a
+            // chord step contracts it by about K s_j with K ≈ c / s_j² (quadratic
+            // convergence): c / s_j, the rate the chord measures against s_j.
+            if alpha == 1.0 && contraction <= 0.05 {
+                self.frozen = Some(nc);
+                match self.chord(nc, false, pair) {
+                    Step::Converged => return Step::Converged,
+                    Step::Failed if !self.y.iter().all(|v| v.is_finite()) => return Step::Failed,
+                    // Slower than expected (or at the apex, which Newton reports
+                    // itself): refactor.
+                    _ => self.frozen = None,
                 }
             }
         }
