@@ -3,8 +3,10 @@
 
 pub(crate) use grasp_core::matrix::dot4;
 
-/// In-place Cholesky `A = L Lᵀ` (lower triangle of the row-major n × n `a`); false if
-/// not positive definite.
+/// In-place Cholesky `A = L Lᵀ` (lower triangle of the row-major n × n `a`), with
+/// each diagonal entry stored as its reciprocal `1/L_jj`: the triangular solves then
+/// multiply where they would divide (a division's latency, on every row of a solve
+/// whose rows wait on each other). False if not positive definite.
 pub(crate) fn cholesky(a: &mut [f64], n: usize) -> bool {
     for j in 0..n {
         let row_j = &mut a[j * n..j * n + n];
@@ -12,23 +14,23 @@ pub(crate) fn cholesky(a: &mut [f64], n: usize) -> bool {
         if d.is_nan() || d <= 0.0 || !d.is_finite() {
             return false;
         }
-        let d = d.sqrt();
-        row_j[j] = d;
+        let inv = 1.0 / d.sqrt();
+        row_j[j] = inv;
         for i in j + 1..n {
             let (lo, hi) = a.split_at_mut(i * n);
             let row_j = &lo[j * n..j * n + j];
             let row_i = &mut hi[..n];
-            row_i[j] = (row_i[j] - dot4(&row_i[..j], row_j)) / d;
+            row_i[j] = (row_i[j] - dot4(&row_i[..j], row_j)) * inv;
         }
     }
     true
 }
 
-/// Solves `L x = b` in place.
+/// Solves `L x = b` in place (L from [`cholesky`]).
 pub(crate) fn forward(l: &[f64], n: usize, b: &mut [f64]) {
     for i in 0..n {
         let row = &l[i * n..i * n + i + 1];
-        b[i] = (b[i] - dot4(&row[..i], &b[..i])) / row[i];
+        b[i] = (b[i] - dot4(&row[..i], &b[..i])) * row[i];
     }
 }
 
@@ -36,7 +38,7 @@ pub(crate) fn forward(l: &[f64], n: usize, b: &mut [f64]) {
 pub(crate) fn backward(l: &[f64], n: usize, b: &mut [f64]) {
     for i in (0..n).rev() {
         let row = &l[i * n..i * n + i + 1];
-        let x = b[i] / row[i];
+        let x = b[i] * row[i];
         b[i] = x;
         for (bk, lk) in b[..i].iter_mut().zip(&row[..i]) {
             *bk -= lk * x;

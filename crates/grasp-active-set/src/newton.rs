@@ -523,52 +523,10 @@ impl Newton {
     /// step before the first (the Newton step that produced the factors; infinite if
     /// none), against which the first step's contraction is measured.
     fn chord(&mut self, nc: usize, explicit: bool, mut previous: f64) -> Step {
-        let n = self.n;
         for _ in 0..MAX_NEWTON {
             self.iterations += 1;
-            // Only the constraints' slacks enter the residual (the caller computes
-            // the rest once it has converged).
-            for r in 0..nc {
-                let rows = match self.owner[r] {
-                    Owner::Row(i) => i..i + 1,
-                    Owner::Cone(k) => self.socs[k].0..self.socs[k].0 + self.socs[k].1,
-                };
-                for i in rows {
-                    self.s[i] = self.b_red[i] - dot4(self.a_red.row(i), &self.y);
-                }
-            }
-            // t = −(P y + Σ ν_r ∇c_r(y)), cval = c(y).
-            for j in 0..n {
-                self.t[j] = -2.0 * self.y[j];
-            }
-            for r in 0..nc {
-                match self.owner[r] {
-                    Owner::Row(i) => {
-                        self.cval[r] = -self.s[i];
-                        let nu = self.nu_row[i];
-                        for (t, a) in self.t[..n].iter_mut().zip(self.a_red.row(i)) {
-                            *t -= nu * a;
-                        }
-                    }
-                    Owner::Cone(k) => {
-                        let (start, dim) = self.socs[k];
-                        let rr = soc_norm(&self.s[start + 1..start + dim]);
-                        if rr.is_nan() || rr <= 1e-12 * (self.s[start].abs() + rr) {
-                            return Step::Failed;
-                        }
-                        self.cval[r] = rr - self.s[start];
-                        let nu = self.nu_cone[k];
-                        for (t, a) in self.t[..n].iter_mut().zip(self.a_red.row(start)) {
-                            *t -= nu * a;
-                        }
-                        for j in 1..dim {
-                            let c = nu * self.s[start + j] / rr;
-                            for (t, a) in self.t[..n].iter_mut().zip(self.a_red.row(start + j)) {
-                                *t += c * a;
-                            }
-                        }
-                    }
-                }
+            if !self.residual(nc) {
+                return Step::Failed;
             }
             if explicit {
                 self.apply_kkt_inverse(nc);
@@ -618,6 +576,60 @@ impl Newton {
             }
         }
         Step::Failed
+    }
+
+    /// The KKT residual of the first `nc` constraints at `y`: `t = −(P y + Σ ν_r
+    /// ∇c_r(y))` and `cval = c(y)`, with those constraints' slacks (the caller computes
+    /// the rest once it has converged); false at a cone's apex.
+    fn residual(&mut self, nc: usize) -> bool {
+        let n = self.n;
+        let a = self.a_red.as_slice();
+        let (y, t, s) = (&self.y[..n], &mut self.t[..n], &mut self.s);
+        for (t, y) in t.iter_mut().zip(y) {
+            *t = -2.0 * y;
+        }
+        for r in 0..nc {
+            match self.owner[r] {
+                Owner::Row(i) => {
+                    let ai = &a[i * n..i * n + n];
+                    let si = self.b_red[i] - dot4(ai, y);
+                    s[i] = si;
+                    self.cval[r] = -si;
+                    let nu = self.nu_row[i];
+                    for (t, a) in t.iter_mut().zip(ai) {
+                        *t -= nu * a;
+                    }
+                }
+                Owner::Cone(k) => {
+                    let (start, dim) = self.socs[k];
+                    let block = &a[start * n..(start + dim) * n];
+                    let sk = &mut s[start..start + dim];
+                    for ((sj, aj), bj) in sk
+                        .iter_mut()
+                        .zip(block.chunks_exact(n))
+                        .zip(&self.b_red[start..])
+                    {
+                        *sj = bj - dot4(aj, y);
+                    }
+                    let rr = soc_norm(&sk[1..]);
+                    if rr.is_nan() || rr <= 1e-12 * (sk[0].abs() + rr) {
+                        return false;
+                    }
+                    self.cval[r] = rr - sk[0];
+                    let nu = self.nu_cone[k];
+                    for (t, a) in t.iter_mut().zip(&block[..n]) {
+                        *t -= nu * a;
+                    }
+                    for (sj, aj) in sk[1..].iter().zip(block[n..].chunks_exact(n)) {
+                        let c = nu * sj / rr;
+                        for (t, a) in t.iter_mut().zip(aj) {
+                            *t += c * a;
+                        }
+                    }
+                }
+            }
+        }
+        true
     }
 
     /// The largest change `d` of the first `nc` constraints' multipliers, relative to
@@ -697,7 +709,9 @@ impl Newton {
                 if nu <= 0.0 {
                     continue;
                 }
-                // (ν/r) A1ᵀ (I − uuᵀ) A1 = (ν/r) (G − v vᵀ), v = A1ᵀ u (upper triangle).
+                // (ν/r) A1ᵀ (I − uuᵀ) A1 = (ν/r) (G − v vᵀ), v = A1ᵀ u: whole rows (G and
+                // v vᵀ are exactly symmetric), whose fixed length vectorises where a
+                // triangle's rows do not.
                 let c = nu / r;
                 let v = &mut self.t[..n];
                 v.iter_mut().for_each(|x| *x = 0.0);
@@ -708,20 +722,11 @@ impl Newton {
                     }
                 }
                 let g = &self.gram[k * n * n..(k + 1) * n * n];
-                for i in 0..n {
-                    let vi = v[i];
-                    for ((h, gij), vj) in self.h[i * n + i..i * n + n]
-                        .iter_mut()
-                        .zip(&g[i * n + i..i * n + n])
-                        .zip(&v[i..])
-                    {
+                for ((hrow, grow), vi) in self.h.chunks_exact_mut(n).zip(g.chunks_exact(n)).zip(&*v)
+                {
+                    for ((h, gij), vj) in hrow.iter_mut().zip(grow).zip(&*v) {
                         *h += c * (gij - vi * vj);
                     }
-                }
-            }
-            for i in 0..n {
-                for j in 0..i {
-                    self.h[i * n + j] = self.h[j * n + i];
                 }
             }
             if !cholesky(&mut self.h, n) {

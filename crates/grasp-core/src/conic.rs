@@ -444,8 +444,10 @@ impl ConicForm {
             ),
         };
         let stationarity = residual / colsize;
-        // The maxima above skip NaN: a non-finite input fails here instead.
-        let finite = basis_ok && b.iter().chain(x).chain(&z[eq..]).all(|v| v.is_finite());
+        // The maxima above skip NaN: a non-finite input fails here instead (`v · 0` is
+        // 0 for a finite v and NaN otherwise: one sum, without a branch per entry).
+        let zeroed = |v: &[f64]| v.iter().map(|v| v * 0.0).sum::<f64>();
+        let finite = basis_ok && zeroed(b) + zeroed(x) + zeroed(&z[eq..]) == 0.0;
         // Primal violation against the size of its terms, |b_i| + Σ_j |a_ij x_j|. Its
         // lower bound max(|b_i|, |(A x)_i|) is formed first: a violation within
         // tolerance of that is within tolerance of the terms, and only a point that
