@@ -15,8 +15,10 @@
 //! 4. otherwise (a contact at the apex, a guess Newton cannot correct, a grasp the
 //!    inscribed polyhedra cannot hold but the circumscribed can) falls back to the dense
 //!    interior-point method of [`crate::ipm`] on the same form, certificate-checked the
-//!    same way (`method: "interior_point"`). A run that fails is tried once more against
-//!    finer circumscribed polyhedra (`N = 256`, within 8e-5 of the cones).
+//!    same way (`method: "interior_point"`). A run that fails ends `infeasible` when its
+//!    multipliers have grown along a ray of the dual that proves it
+//!    ([`ConicForm::dual_ray`], `Reason::DualRay`), or against finer circumscribed
+//!    polyhedra (`N = 256`, within 8e-5 of the cones).
 //!
 //! A warm solve (`GraspSolver::resolve`) starts Newton from the previous answer and its
 //! pieces, without the inscribed solve.
@@ -289,6 +291,26 @@ impl ExactSolver {
         false
     }
 
+    /// The interior-point method's last multipliers as a ray of the dual, when they
+    /// prove the grasp infeasible: on a grasp the exact cones cannot hold, although
+    /// the circumscribed polyhedra can, the method's dual iterates grow along such a
+    /// ray until it stalls.
+    fn dual_ray(&mut self, w: &[f64; 6], alpha: f64) -> Option<Reason> {
+        self.ipm.dual_into(&self.conic, &mut self.dual);
+        let xp = self.newton.particular(w, alpha)?;
+        let ray = self.conic.dual_ray(
+            &self.b,
+            xp,
+            &self.dual,
+            CERTIFICATE_TOLERANCE,
+            &mut self.scratch,
+        );
+        ray.passed.then_some(Reason::DualRay {
+            value: ray.value,
+            stationarity: ray.stationarity,
+        })
+    }
+
     fn infeasible(out: &mut Solution, reason: Reason) {
         out.status = Status::Infeasible;
         out.reason = Some(reason);
@@ -373,6 +395,9 @@ impl TorqueSolver for ExactSolver {
                 return;
             }
         }
+        if let Some(reason) = self.dual_ray(w, alpha) {
+            return Self::infeasible(out, reason);
+        }
         if let Some(reason) = self.outer_infeasible(w, FINE_SIDES) {
             return Self::infeasible(out, reason);
         }
@@ -400,6 +425,90 @@ mod tests {
     use super::*;
     use grasp_core::{GraspModel, ModelOptions};
     use std::sync::Arc;
+
+    /// A dual ray proves infeasibility only as it is: scaled it still does (a ray),
+    /// spoiled it does not. And the interior-point method's multipliers on a feasible
+    /// grasp never pass for one.
+    #[test]
+    fn the_dual_ray_check_accepts_a_ray_and_nothing_near_it() {
+        let p = grasp_testkit::sweep_grasp(1084, 1.0);
+        let model = Arc::new(GraspModel::new(&p, &ModelOptions::default()).unwrap());
+        let mut s = ExactSolver::new(TorqueQp::exact(model), Default::default()).unwrap();
+        let mut out = Solution::default();
+        s.solve_raw(&p.wrench, &WarmStart::default(), &mut out);
+        assert!(
+            matches!(out.reason, Some(Reason::DualRay { .. })),
+            "{:?}",
+            out.reason
+        );
+        let alpha = s.conic.b_into(&p.wrench, &mut s.b);
+        let xp = s.newton.particular(&p.wrench, alpha).unwrap().to_vec();
+        let mut scratch = Vec::new();
+        let check = |z: &[f64], scratch: &mut Vec<f64>| {
+            s.conic
+                .dual_ray(&s.b, &xp, z, CERTIFICATE_TOLERANCE, scratch)
+        };
+        let ray = s.dual.clone();
+        assert!(check(&ray, &mut scratch).passed);
+        let scaled: Vec<f64> = ray.iter().map(|v| 1e-30 * v).collect();
+        assert!(check(&scaled, &mut scratch).passed, "a scaled ray failed");
+        let negated: Vec<f64> = ray.iter().map(|v| -v).collect();
+        let c = check(&negated, &mut scratch);
+        assert!(!c.passed && c.dual > 1e-9, "a negated ray passed: {c:?}");
+        // One multiplier moved by a millionth of the largest: torque terms are left.
+        let eq = s.conic.linear_at.min(s.conic.rows());
+        let zmax = ray[eq..].iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let i = (eq..ray.len())
+            .max_by(|&a, &b| ray[a].abs().total_cmp(&ray[b].abs()))
+            .unwrap();
+        let mut moved = ray.clone();
+        moved[i] += 1e-6 * zmax;
+        let c = check(&moved, &mut scratch);
+        assert!(
+            !c.passed && c.stationarity > 1e-9,
+            "a moved ray passed: {c:?}"
+        );
+        // A point that misses the equalities is no x_p.
+        if s.conic
+            .cones
+            .first()
+            .is_some_and(|c| matches!(c, grasp_core::ConeKind::Zero(_)))
+        {
+            let off: Vec<f64> = xp.iter().map(|v| v + 1e-3).collect();
+            let c = s
+                .conic
+                .dual_ray(&s.b, &off, &ray, CERTIFICATE_TOLERANCE, &mut scratch);
+            assert!(
+                !c.passed && c.particular > 1e-9,
+                "a wrong x_p passed: {c:?}"
+            );
+        }
+        // Feasible grasps: the converged multipliers are no ray.
+        let mut checked = 0;
+        for case in grasp_testkit::reference_cases() {
+            let p = grasp_testkit::reference_problem(&case["problem"]);
+            let model = Arc::new(GraspModel::new(&p, &ModelOptions::default()).unwrap());
+            let mut s = ExactSolver::new(TorqueQp::exact(model), Default::default()).unwrap();
+            let alpha = s.conic.b_into(&p.wrench, &mut s.b);
+            if alpha == 0.0 || s.ipm.solve(&s.conic, &s.b) != IpmEnd::Converged {
+                continue;
+            }
+            s.ipm.dual_into(&s.conic, &mut s.dual);
+            let Some(xp) = s.newton.particular(&p.wrench, alpha) else {
+                continue;
+            };
+            let c = s
+                .conic
+                .dual_ray(&s.b, xp, &s.dual, CERTIFICATE_TOLERANCE, &mut scratch);
+            // P x + Aᵀ z = 0 leaves torque terms unless x = 0, and then zᵀ s ≥ 0.
+            assert!(
+                !c.passed && (c.stationarity > 1e-9 || c.value >= -1e-6),
+                "a feasible grasp's multipliers passed: {c:?}"
+            );
+            checked += 1;
+        }
+        assert!(checked >= 30, "only {checked} reference grasps checked");
+    }
 
     /// The Newton answers of the reference grasps pass the certificate, and the same
     /// answers spoiled each way fail it.

@@ -34,6 +34,8 @@ use grasp_core::linalg::{decompose, RankThreshold};
 use grasp_core::matrix::{add_columns, column_major, norm_inf};
 use grasp_core::{ConeKind, ConicForm, Matrix};
 
+/// Largest tail of a second-order cone (the friction cones' are 2 or 3 long).
+const MAX_TAIL: usize = crate::ipm::SOC_MAX - 1;
 /// Newton iterations per guess, and corrections of the guess.
 const MAX_NEWTON: usize = 12;
 const MAX_CHANGES: usize = 8;
@@ -93,10 +95,6 @@ pub(crate) struct Newton {
     a_red: Matrix,
     /// Rows `eq..` of `a_red` column-major, for the pass over every slack.
     a_red_cols: Vec<f64>,
-    /// Per second-order cone, the Gram matrix `A1ᵀ A1` of its tail rows in the
-    /// reduced variables (k × k each): the curvature `A1ᵀ (I − uuᵀ) A1` is then
-    /// `G − (A1ᵀu)(A1ᵀu)ᵀ`, O(k²) per cone and iteration.
-    gram: Vec<f64>,
     /// `b − A x_p` and `x_p` are affine in the wrench, like b: their constant and
     /// wrench parts side by side, column-major (rows `eq..` × 7 and nx × 7), so that a
     /// solve costs seven passes down columns, not a pass through E⁺
@@ -186,22 +184,9 @@ impl Newton {
                 b - dot4(form.a.row(i), &column(&xp_map, c))
             }
         });
-        let mut gram = vec![0.0; socs.len() * k * k];
-        for (c, &(start, dim)) in socs.iter().enumerate() {
-            let g = &mut gram[c * k * k..(c + 1) * k * k];
-            for p in start + 1..start + dim {
-                let a = a_red.row(p);
-                for i in 0..k {
-                    for j in 0..k {
-                        g[i * k + j] += a[i] * a[j];
-                    }
-                }
-            }
-        }
         let n = k;
         let ncmax = (orth.1 - orth.0) + socs.len();
         Self {
-            gram,
             b_red_cols: column_major(rows - eq, 7, |i, c| b_red_map[(eq + i, c)]),
             xp_cols: column_major(form.nx, 7, |j, c| xp_map[(j, c)]),
             null_basis_t: null_basis.transpose(),
@@ -241,6 +226,32 @@ impl Newton {
         }
     }
 
+    /// `x_p = E⁺ b_E` for the wrench at magnitude α, a point meeting the equalities
+    /// (for a dual ray's value); None when they could not be eliminated.
+    pub(crate) fn particular(&mut self, w: &[f64; 6], alpha: f64) -> Option<&[f64]> {
+        (self.null_basis.nrows() == self.xp.len()).then(|| {
+            self.set_particular(w, alpha);
+            &self.xp[..]
+        })
+    }
+
+    /// Fills `xp`; returns the weights `[1, w]/α` of the maps' seven columns.
+    fn set_particular(&mut self, w: &[f64; 6], alpha: f64) -> [f64; 7] {
+        let r = 1.0 / alpha;
+        let wt = [
+            r,
+            r * w[0],
+            r * w[1],
+            r * w[2],
+            r * w[3],
+            r * w[4],
+            r * w[5],
+        ];
+        self.xp.iter_mut().for_each(|v| *v = 0.0);
+        add_columns(&mut self.xp, &self.xp_cols, &wt, 1.0);
+        wt
+    }
+
     /// Scales the iterate and multipliers by `f` (the scaled problem's answer moves
     /// with 1/α when the right-hand side's magnitude α changes).
     pub(crate) fn rescale(&mut self, f: f64) {
@@ -276,18 +287,7 @@ impl Newton {
             return false;
         }
         // x_p = E⁺ b_E and b_red = b − (A E⁺) b_E from the wrench, at magnitude α.
-        let r = 1.0 / alpha;
-        let wt = [
-            r,
-            r * w[0],
-            r * w[1],
-            r * w[2],
-            r * w[3],
-            r * w[4],
-            r * w[5],
-        ];
-        self.xp.iter_mut().for_each(|v| *v = 0.0);
-        add_columns(&mut self.xp, &self.xp_cols, &wt, 1.0);
+        let wt = self.set_particular(w, alpha);
         let b_red = &mut self.b_red[self.eq..];
         b_red.iter_mut().for_each(|v| *v = 0.0);
         add_columns(b_red, &self.b_red_cols, &wt, 1.0);
@@ -709,23 +709,47 @@ impl Newton {
                 if nu <= 0.0 {
                     continue;
                 }
-                // (ν/r) A1ᵀ (I − uuᵀ) A1 = (ν/r) (G − v vᵀ), v = A1ᵀ u: whole rows (G and
-                // v vᵀ are exactly symmetric), whose fixed length vectorises where a
-                // triangle's rows do not.
+                // (ν/r) A1ᵀ (I − uuᵀ) A1 as a sum of squares, positive semidefinite by
+                // construction (G − v vᵀ with G = A1ᵀA1 cancels: with ν/r large it lost
+                // the positive definiteness of H to rounding). The reflector
+                // Q = I − 2 q qᵀ, q ∝ u ± e1, maps u to ∓e1, so its columns Q e_j,
+                // j ≥ 1, are an orthonormal basis of u⊥ and I − uuᵀ = Σ_j Q e_j (Q e_j)ᵀ;
+                // A1ᵀ Q e_j = a_j − 2 q_j m with m = Σ_i q_i a_i.
                 let c = nu / r;
-                let v = &mut self.t[..n];
-                v.iter_mut().for_each(|x| *x = 0.0);
-                for j in 1..dim {
-                    let u = s1[j - 1] / r;
-                    for (x, a) in v.iter_mut().zip(self.a_red.row(start + j)) {
-                        *x += u * a;
+                let tail = dim - 1;
+                let mut q = [0.0; MAX_TAIL];
+                let q = &mut q[..tail];
+                for (qi, si) in q.iter_mut().zip(s1) {
+                    *qi = si / r;
+                }
+                let sign = if q[0] >= 0.0 { 1.0 } else { -1.0 };
+                q[0] += sign;
+                let qn = soc_norm(q);
+                q.iter_mut().for_each(|v| *v /= qn);
+                let m = &mut self.t[..n];
+                m.iter_mut().for_each(|x| *x = 0.0);
+                for (qi, row) in q
+                    .iter()
+                    .zip(self.a_red.as_slice()[(start + 1) * n..].chunks_exact(n))
+                {
+                    for (x, a) in m.iter_mut().zip(row) {
+                        *x += qi * a;
                     }
                 }
-                let g = &self.gram[k * n * n..(k + 1) * n * n];
-                for ((hrow, grow), vi) in self.h.chunks_exact_mut(n).zip(g.chunks_exact(n)).zip(&*v)
+                for (j, row) in self.a_red.as_slice()[(start + 2) * n..(start + dim) * n]
+                    .chunks_exact(n)
+                    .enumerate()
                 {
-                    for ((h, gij), vj) in hrow.iter_mut().zip(grow).zip(&*v) {
-                        *h += c * (gij - vi * vj);
+                    let f = 2.0 * q[j + 1];
+                    let g = &mut self.dx[..n];
+                    for ((g, a), m) in g.iter_mut().zip(row).zip(&*m) {
+                        *g = a - f * m;
+                    }
+                    for (hrow, gi) in self.h.chunks_exact_mut(n).zip(&*g) {
+                        let cg = c * gi;
+                        for (h, gj) in hrow.iter_mut().zip(&*g) {
+                            *h += cg * gj;
+                        }
                     }
                 }
             }

@@ -337,6 +337,106 @@ impl ConicForm {
         alpha
     }
 
+    /// Checks from scratch that `z` is a ray of the dual of the scaled problem with
+    /// right-hand side `b`, a certificate that no x has `s = b − A x ∈ K`: `z` in the
+    /// dual cone on the inequality rows, `A_inᵀ z` in the range of the equality rows
+    /// (its projection on their null space vanishes: the equalities' multipliers
+    /// cancel the rest), and `zᵀ (b − A x_p) < 0` for a point `x_p` meeting the
+    /// equalities. For any x meeting them, `x = x_p + N y` and
+    /// `zᵀ s = zᵀ(b − A x_p) − (Nᵀ A_inᵀ z)ᵀ y`, negative unless y is huge, while
+    /// `s ∈ K` would make it non-negative. Each measure is relative to its terms, as
+    /// in [`Self::certificate`]; `scratch` is grown once and reused.
+    pub fn dual_ray(
+        &self,
+        b: &[f64],
+        xp: &[f64],
+        z: &[f64],
+        tol: f64,
+        scratch: &mut Vec<f64>,
+    ) -> RayCheck {
+        let (rows, nx) = (self.rows(), self.nx);
+        let w4 = self.a_padded.ncols();
+        if scratch.len() < rows + 2 * w4 {
+            scratch.resize(rows + 2 * w4, 0.0);
+        }
+        let (sp, rest) = scratch.split_at_mut(rows);
+        let (grad, gsize) = rest[..2 * w4].split_at_mut(w4);
+        let eq = match self.cones.first() {
+            Some(&ConeKind::Zero(p)) => p,
+            _ => 0,
+        };
+        // s_p = b − A x_p: zero on the equalities, the value's terms on the rest.
+        sp.copy_from_slice(&b[..rows]);
+        add_columns(sp, &self.a_cols, &xp[..nx], -1.0);
+        let mut particular = 0.0f64;
+        for (&bi, &si) in b[..eq].iter().zip(&sp[..eq]) {
+            let size = fmax(bi.abs(), (bi - si).abs()).max(f64::MIN_POSITIVE);
+            particular = fmax(particular, si.abs() / size);
+        }
+        let (mut value, mut vsize, mut zmax) = (0.0, f64::MIN_POSITIVE, f64::MIN_POSITIVE);
+        for i in eq..rows {
+            value += z[i] * sp[i];
+            vsize += z[i].abs() * (b[i].abs() + (b[i] - sp[i]).abs());
+            zmax = fmax(zmax, z[i].abs());
+        }
+        let mut dual = 0.0f64;
+        let mut start = 0;
+        for cone in &self.cones {
+            let r = start..start + cone.dim();
+            match *cone {
+                ConeKind::Zero(_) => {}
+                ConeKind::Nonnegative(_) => {
+                    for i in r {
+                        dual = fmax(dual, -z[i]);
+                    }
+                }
+                ConeKind::SecondOrder(_) => {
+                    dual = fmax(dual, soc_excess(z[r.start], &z[r.start + 1..r.end]));
+                }
+            }
+            start += cone.dim();
+        }
+        // g = A_inᵀ z_in, against Σ |terms| per column.
+        grad.iter_mut()
+            .chain(gsize.iter_mut())
+            .for_each(|v| *v = 0.0);
+        for i in (eq..rows).filter(|&i| z[i] != 0.0) {
+            let (lo, hi) = self.row_span[i];
+            for ((g, gs), a) in grad[lo..hi]
+                .iter_mut()
+                .zip(&mut gsize[lo..hi])
+                .zip(&self.a_padded.row(i)[lo..hi])
+            {
+                let t = a * z[i];
+                *g += t;
+                *gs += t.abs();
+            }
+        }
+        let colsize = gsize.iter().fold(f64::MIN_POSITIVE, |a, v| fmax(a, *v));
+        let (residual, basis_ok) = match &self.eq_null_t {
+            None => (grad.iter().fold(0.0f64, |a, g| fmax(a, g.abs())), true),
+            Some(nt) => (
+                (0..nt.nrows()).fold(0.0f64, |a, r| fmax(a, dot4(nt.row(r), &grad[..nx]).abs())),
+                nt.ncols() == nx,
+            ),
+        };
+        let zeroed = |v: &[f64]| v.iter().map(|v| v * 0.0).sum::<f64>();
+        let finite =
+            basis_ok && zeroed(&b[..rows]) + zeroed(&xp[..nx]) + zeroed(&z[eq..rows]) == 0.0;
+        let (dual, stationarity, value) = (dual / zmax, residual / colsize, value / vsize);
+        RayCheck {
+            dual,
+            stationarity,
+            value,
+            particular,
+            passed: finite
+                && dual <= tol
+                && stationarity <= tol
+                && particular <= tol
+                && value < -RAY_MARGIN * tol,
+        }
+    }
+
     /// The torques and free internal forces of a scaled solution `x` at magnitude α.
     pub fn unscale_into(&self, x: &[f64], alpha: f64, torque: &mut Vec<f64>, xi: &mut Vec<f64>) {
         let (m, d) = (self.joints, self.free);
@@ -503,6 +603,28 @@ fn fmax(a: f64, b: f64) -> f64 {
         a
     }
 }
+
+/// The outcome of [`ConicForm::dual_ray`]: each measure relative to its terms.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RayCheck {
+    /// Largest violation of `z ∈ K*` on the inequality rows, against `‖z‖∞`.
+    pub dual: f64,
+    /// The torque terms left, `‖N_Eᵀ A_inᵀ z‖∞` (on the null space of the equalities),
+    /// against the largest column sum of `|a_ij z_i|`.
+    pub stationarity: f64,
+    /// `zᵀ (b − A x_p)` on the inequality rows, against the size of its terms: negative
+    /// for a certificate.
+    pub value: f64,
+    /// How far `x_p` misses the equalities, against their terms.
+    pub particular: f64,
+    /// Whether `z` proves the problem infeasible: every measure within the tolerance
+    /// and `value` below −[`RAY_MARGIN`] times it.
+    pub passed: bool,
+}
+
+/// How far below zero, in multiples of the tolerance, a dual ray's relative value must
+/// be: clearly negative, not rounding.
+pub const RAY_MARGIN: f64 = 1e3;
 
 /// The outcome of [`ConicForm::certificate`]: each measure relative to its terms.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -20,7 +20,7 @@ pub mod qp;
 pub mod solver;
 
 pub use cone::{circumscribed_cone, inscribed_cone, InscribedCone, Linearization, SfceSpacing};
-pub use conic::{Certificate, ConeKind, ConicForm};
+pub use conic::{Certificate, ConeKind, ConicForm, RayCheck};
 pub use contact::ContactModel;
 pub use error::{ModelError, ProblemError};
 pub use matrix::Matrix;

@@ -108,6 +108,17 @@ pub enum Reason {
         /// Why the circumscribed problem is infeasible.
         cause: Box<Reason>,
     },
+    /// A ray of the exact problem's dual (a Farkas certificate): multipliers `z` in the
+    /// dual cones whose combination of the constraint rows has no torque terms (to
+    /// `stationarity`) and a negative right-hand side, `zᵀ(b − A x) = value < 0` for
+    /// every torque meeting the equalities, although a feasible torque would make it
+    /// `zᵀ s ≥ 0`. Checked from scratch ([`crate::ConicForm::dual_ray`]).
+    DualRay {
+        /// `value` against the size of its terms (negative).
+        value: f64,
+        /// The largest torque term left, against the size of its terms.
+        stationarity: f64,
+    },
     /// Backend-specific explanation.
     Backend {
         /// The backend's name.
@@ -148,6 +159,10 @@ impl fmt::Display for Reason {
             Reason::OuterApproximation { sides, cause } => write!(
                 f,
                 "even the circumscribed polyhedral cones (N = {sides}), which contain the exact cones, admit no torque: {cause}"
+            ),
+            Reason::DualRay { value, stationarity } => write!(
+                f,
+                "no torque keeps every contact force inside its exact cone while balancing the wrench: multipliers in the dual cones combine the constraints into 0 ≤ {value:.3e} (relative; a Farkas certificate, torque terms cancelled to {stationarity:.1e})"
             ),
             Reason::Backend { backend, message } => write!(f, "{backend}: {message}"),
         }

@@ -172,6 +172,36 @@ pub fn synthetic_grasp(seed: u64, spec: &SynthSpec) -> GeometryFile {
     }
 }
 
+/// The exact-cone robustness sweep's grasp: [`synthetic_grasp`] at the default spec,
+/// every friction coefficient scaled by `friction`, and the wrench moved by up to half
+/// its largest component per entry (seeded by `seed`).
+pub fn sweep_grasp(seed: u64, friction: f64) -> grasp_core::GraspProblem {
+    use grasp_core::ContactModel;
+    let mut p = synthetic_grasp(seed, &SynthSpec::default())
+        .into_problem()
+        .expect("a synthetic grasp is valid");
+    for c in &mut p.contacts {
+        *c = match *c {
+            ContactModel::Fpc => ContactModel::Fpc,
+            ContactModel::Pcwf { mu } => ContactModel::Pcwf { mu: mu * friction },
+            ContactModel::SfcLinear { mu, mu_torsion } => ContactModel::SfcLinear {
+                mu: mu * friction,
+                mu_torsion: mu_torsion * friction,
+            },
+            ContactModel::SfcElliptic { mu, mu_torsion } => ContactModel::SfcElliptic {
+                mu: mu * friction,
+                mu_torsion: mu_torsion * friction,
+            },
+        };
+    }
+    let mut rng = Rng(seed ^ 0x5eed);
+    let size = p.wrench.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    for w in &mut p.wrench {
+        *w += rng.uniform(-0.5, 0.5) * size;
+    }
+    p
+}
+
 /// The JSON files of the bundled fixtures in each of `dirs` (relative to `fixtures/`,
 /// `""` for the top level), sorted by name within each folder, folders in the order
 /// given.

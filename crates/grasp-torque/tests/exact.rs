@@ -5,13 +5,11 @@
 //! need no Clarabel also run in the native-only build.
 #![cfg(feature = "active-set")]
 
-#[cfg(feature = "clarabel")]
-use grasp_testkit::{synthetic_grasp, Rng, SynthSpec};
+use grasp_testkit::sweep_grasp as grasp;
 use grasp_torque::{
-    solve, Backend, Cones, GraspProblem, GraspSolver, Solution, SolverConfig, Status, WarmStart,
+    solve, Backend, Cones, GraspProblem, GraspSolver, Reason, Solution, SolverConfig, Status,
+    WarmStart,
 };
-#[cfg(feature = "clarabel")]
-use grasp_torque::{ContactModel, Reason};
 
 fn run(p: &GraspProblem, backend: Backend, cones: Cones) -> Solution {
     let c = SolverConfig {
@@ -71,34 +69,6 @@ fn exact_cones_use_the_native_solver_by_default() {
     assert_eq!(sol.status, Status::Optimal);
 }
 
-/// A random grasp at friction scaled by `friction`, its wrench perturbed.
-#[cfg(feature = "clarabel")]
-fn grasp(seed: u64, friction: f64) -> GraspProblem {
-    let mut p = synthetic_grasp(seed, &SynthSpec::default())
-        .into_problem()
-        .unwrap();
-    for c in &mut p.contacts {
-        *c = match *c {
-            ContactModel::Fpc => ContactModel::Fpc,
-            ContactModel::Pcwf { mu } => ContactModel::Pcwf { mu: mu * friction },
-            ContactModel::SfcLinear { mu, mu_torsion } => ContactModel::SfcLinear {
-                mu: mu * friction,
-                mu_torsion: mu_torsion * friction,
-            },
-            ContactModel::SfcElliptic { mu, mu_torsion } => ContactModel::SfcElliptic {
-                mu: mu * friction,
-                mu_torsion: mu_torsion * friction,
-            },
-        };
-    }
-    let mut rng = Rng(seed ^ 0x5eed);
-    let size = p.wrench.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    for w in &mut p.wrench {
-        *w += rng.uniform(-0.5, 0.5) * size;
-    }
-    p
-}
-
 /// Hundreds of random grasps and wrenches, at normal friction and at a quarter of it:
 /// no `optimal` answer that Clarabel calls infeasible or that disagrees with Clarabel's
 /// (1e-7 relative), none above a linearisation's σ(N), and the same status as Clarabel
@@ -106,9 +76,9 @@ fn grasp(seed: u64, friction: f64) -> GraspProblem {
 #[cfg(feature = "clarabel")]
 #[test]
 fn robustness_sweep_against_clarabel_and_the_linearisations() {
-    // Optimal, infeasible by the N = 8 circumscribed cones, by N = 256, other, and an
-    // unreachable wrench (the core's check).
-    let mut count = [0usize; 5];
+    // Optimal, infeasible by the N = 8 circumscribed cones, by N = 256, other, an
+    // unreachable wrench (the core's check), and a dual ray.
+    let mut count = [0usize; 6];
     let mut worst = 0.0f64;
     let (mut linear_checks, mut fallback) = (0, 0);
     for (friction, seeds) in [(1.0, 0..300u64), (0.25, 1000..1300u64)] {
@@ -160,6 +130,7 @@ fn robustness_sweep_against_clarabel_and_the_linearisations() {
                     Some(Reason::UnreachableWrench { .. }) => count[4] += 1,
                     Some(Reason::OuterApproximation { sides: 8, .. }) => count[1] += 1,
                     Some(Reason::OuterApproximation { .. }) => count[2] += 1,
+                    Some(Reason::DualRay { .. }) => count[5] += 1,
                     ref other => panic!("seed {seed}: infeasible for {other:?}"),
                 },
                 _ => count[3] += 1,
@@ -167,10 +138,58 @@ fn robustness_sweep_against_clarabel_and_the_linearisations() {
         }
     }
     eprintln!(
-        "600 grasps: {} optimal ({fallback} by the interior-point fallback), {} infeasible by the N = 8 circumscribed cones, {} by N = 256, {} with an unreachable wrench, {} other; worst σ difference to Clarabel {worst:.1e}; {linear_checks} σ* ≤ σ(N) checks",
-        count[0], count[1], count[2], count[4], count[3]
+        "600 grasps: {} optimal ({fallback} by the interior-point fallback), {} infeasible by the N = 8 circumscribed cones, {} by a dual ray, {} by N = 256, {} with an unreachable wrench, {} other; worst σ difference to Clarabel {worst:.1e}; {linear_checks} σ* ≤ σ(N) checks",
+        count[0], count[1], count[5], count[2], count[4], count[3]
     );
     assert!(count[0] > 100 && count[1] > 10, "{count:?}");
+}
+
+/// Grasps at the edge of feasibility, found by a sweep five times wider than the one
+/// above (seeds 0..1500 at normal friction, 10000..11500 at a quarter of it): the exact
+/// cones cannot hold them, but the circumscribed polyhedra can, even at N = 256. There
+/// the interior-point method's multipliers grow along a ray of the dual, which proves
+/// the grasp infeasible (they ended `numerical_failure` before). Clarabel agrees.
+#[test]
+fn grasps_at_the_edge_of_feasibility_are_proved_infeasible_by_a_dual_ray() {
+    let edge = [
+        (1084, 1.0),
+        (10372, 0.25),
+        (10595, 0.25),
+        (10876, 0.25),
+        (10965, 0.25),
+        (11001, 0.25),
+        (11048, 0.25),
+        (11065, 0.25),
+        (11103, 0.25),
+        (11179, 0.25),
+    ];
+    for (seed, friction) in edge {
+        let p = grasp(seed, friction);
+        let native = run(&p, Backend::ActiveSet, Cones::Exact);
+        assert_eq!(
+            native.status,
+            Status::Infeasible,
+            "seed {seed}: {:?}",
+            native.reason
+        );
+        match native.reason {
+            Some(Reason::DualRay {
+                value,
+                stationarity,
+            }) => {
+                assert!(
+                    value < -1e-6 && stationarity <= 1e-9,
+                    "seed {seed}: {value:e} {stationarity:e}"
+                );
+            }
+            ref other => panic!("seed {seed}: infeasible for {other:?}"),
+        }
+        #[cfg(feature = "clarabel")]
+        {
+            let clarabel = run(&p, Backend::Clarabel, Cones::Exact);
+            assert_eq!(clarabel.status, Status::Infeasible, "seed {seed}");
+        }
+    }
 }
 
 /// The inscribed linearisations bracket σ* from above and close in on it as N grows;
