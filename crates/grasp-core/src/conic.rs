@@ -337,6 +337,41 @@ impl ConicForm {
         alpha
     }
 
+    /// Adds `A_inᵀ z_in` to `grad` and its terms' sizes to `gsize` (rows `eq..` with a
+    /// multiplier: most are inactive, z = 0). Returns the component of `grad` in the
+    /// null space of the equalities (all of it without any) against the largest column
+    /// of terms, and whether that basis fits.
+    fn torque_terms(
+        &self,
+        z: &[f64],
+        eq: usize,
+        grad: &mut [f64],
+        gsize: &mut [f64],
+    ) -> (f64, bool) {
+        let nx = self.nx;
+        for i in (eq..self.rows()).filter(|&i| z[i] != 0.0) {
+            let (lo, hi) = self.row_span[i];
+            for ((g, gs), a) in grad[lo..hi]
+                .iter_mut()
+                .zip(&mut gsize[lo..hi])
+                .zip(&self.a_padded.row(i)[lo..hi])
+            {
+                let t = a * z[i];
+                *g += t;
+                *gs += t.abs();
+            }
+        }
+        let colsize = gsize.iter().fold(f64::MIN_POSITIVE, |a, v| fmax(a, *v));
+        let (residual, basis_ok) = match &self.eq_null_t {
+            None => (grad.iter().fold(0.0f64, |a, g| fmax(a, g.abs())), true),
+            Some(nt) => (
+                (0..nt.nrows()).fold(0.0f64, |a, r| fmax(a, dot4(nt.row(r), &grad[..nx]).abs())),
+                nt.ncols() == nx,
+            ),
+        };
+        (residual / colsize, basis_ok)
+    }
+
     /// Checks from scratch that `z` is a ray of the dual of the scaled problem with
     /// right-hand side `b`, a certificate that no x has `s = b − A x ∈ K`: `z` in the
     /// dual cone on the inequality rows, `A_inᵀ z` in the range of the equality rows
@@ -396,34 +431,14 @@ impl ConicForm {
             }
             start += cone.dim();
         }
-        // g = A_inᵀ z_in, against Σ |terms| per column.
+        // A_inᵀ z_in: no torque terms may be left.
         grad.iter_mut()
             .chain(gsize.iter_mut())
             .for_each(|v| *v = 0.0);
-        for i in (eq..rows).filter(|&i| z[i] != 0.0) {
-            let (lo, hi) = self.row_span[i];
-            for ((g, gs), a) in grad[lo..hi]
-                .iter_mut()
-                .zip(&mut gsize[lo..hi])
-                .zip(&self.a_padded.row(i)[lo..hi])
-            {
-                let t = a * z[i];
-                *g += t;
-                *gs += t.abs();
-            }
-        }
-        let colsize = gsize.iter().fold(f64::MIN_POSITIVE, |a, v| fmax(a, *v));
-        let (residual, basis_ok) = match &self.eq_null_t {
-            None => (grad.iter().fold(0.0f64, |a, g| fmax(a, g.abs())), true),
-            Some(nt) => (
-                (0..nt.nrows()).fold(0.0f64, |a, r| fmax(a, dot4(nt.row(r), &grad[..nx]).abs())),
-                nt.ncols() == nx,
-            ),
-        };
-        let zeroed = |v: &[f64]| v.iter().map(|v| v * 0.0).sum::<f64>();
+        let (stationarity, basis_ok) = self.torque_terms(z, eq, grad, gsize);
         let finite =
-            basis_ok && zeroed(&b[..rows]) + zeroed(&xp[..nx]) + zeroed(&z[eq..rows]) == 0.0;
-        let (dual, stationarity, value) = (dual / zmax, residual / colsize, value / vsize);
+            basis_ok && all_finite(&b[..rows]) && all_finite(&xp[..nx]) && all_finite(&z[eq..rows]);
+        let (dual, value) = (dual / zmax, value / vsize);
         RayCheck {
             dual,
             stationarity,
@@ -520,34 +535,9 @@ impl ConicForm {
             grad[j] = g;
             gsize[j] = g.abs();
         }
-        // Only the rows with a multiplier contribute (most are inactive, z = 0).
-        for i in (eq..rows).filter(|&i| z[i] != 0.0) {
-            let (lo, hi) = self.row_span[i];
-            let (grad, gsize) = (&mut grad[lo..hi], &mut gsize[lo..hi]);
-            for ((g, gs), a) in grad
-                .iter_mut()
-                .zip(gsize.iter_mut())
-                .zip(&self.a_padded.row(i)[lo..hi])
-            {
-                let t = a * z[i];
-                *g += t;
-                *gs += t.abs();
-            }
-        }
-        let colsize = gsize.iter().fold(f64::MIN_POSITIVE, |a, v| fmax(a, *v));
-        // Its component in the null space of the equalities (all of it without any).
-        let (residual, basis_ok) = match &self.eq_null_t {
-            None => (grad.iter().fold(0.0f64, |a, g| fmax(a, g.abs())), true),
-            Some(nt) => (
-                (0..nt.nrows()).fold(0.0f64, |a, r| fmax(a, dot4(nt.row(r), &grad[..nx]).abs())),
-                nt.ncols() == nx,
-            ),
-        };
-        let stationarity = residual / colsize;
-        // The maxima above skip NaN: a non-finite input fails here instead (`v · 0` is
-        // 0 for a finite v and NaN otherwise: one sum, without a branch per entry).
-        let zeroed = |v: &[f64]| v.iter().map(|v| v * 0.0).sum::<f64>();
-        let finite = basis_ok && zeroed(b) + zeroed(x) + zeroed(&z[eq..]) == 0.0;
+        let (stationarity, basis_ok) = self.torque_terms(z, eq, grad, gsize);
+        // The maxima above skip NaN: a non-finite input fails here instead.
+        let finite = basis_ok && all_finite(b) && all_finite(x) && all_finite(&z[eq..]);
         // Primal violation against the size of its terms, |b_i| + Σ_j |a_ij x_j|. Its
         // lower bound max(|b_i|, |(A x)_i|) is formed first: a violation within
         // tolerance of that is within tolerance of the terms, and only a point that
@@ -592,6 +582,12 @@ pub fn soc_excess(head: f64, tail: &[f64]) -> f64 {
     } else {
         q.sqrt() - head
     }
+}
+
+/// Whether every entry is finite: `v · 0` is 0 for a finite v and NaN otherwise, so
+/// one sum tells, without a branch per entry.
+fn all_finite(v: &[f64]) -> bool {
+    v.iter().map(|v| v * 0.0).sum::<f64>() == 0.0
 }
 
 /// The larger of two numbers, one comparison (NaN is the caller's to rule out).
