@@ -8,14 +8,14 @@
 //!    [`crate::newton`] from the inscribed optimum, which converges in a few steps;
 //! 2. if the inscribed problem is infeasible, solves it with circumscribed polyhedra
 //!    (which contain the cones): infeasible there is a certificate that the exact
-//!    problem is infeasible;
+//!    problem is infeasible; otherwise their optimum, just outside the cones, starts
+//!    Newton the same way;
 //! 3. checks the Newton answer from scratch ([`ConicForm::certificate`]: primal and
 //!    dual cone feasibility, stationarity, complementarity and the duality gap). Only an
 //!    answer that passes is `optimal` (`method: "newton"`);
-//! 4. otherwise (a contact at the apex, a guess Newton cannot correct, a grasp the
-//!    inscribed polyhedra cannot hold but the circumscribed can) falls back to the dense
-//!    interior-point method of [`crate::ipm`] on the same form, certificate-checked the
-//!    same way (`method: "interior_point"`). A run that fails ends `infeasible` when its
+//! 4. otherwise (a guess Newton cannot correct or does not converge from) falls back
+//!    to the dense interior-point method of [`crate::ipm`] on the same form,
+//!    certificate-checked the same way (`method: "interior_point"`). A run that fails ends `infeasible` when its
 //!    multipliers have grown along a ray of the dual that proves it
 //!    ([`ConicForm::dual_ray`], `Reason::DualRay`), or against finer circumscribed
 //!    polyhedra (`N = 256`, within 8e-5 of the cones).
@@ -53,8 +53,7 @@ pub struct ExactSolver {
     inner: ActiveSetSolver,
     inner_row: Vec<Option<usize>>,
     inner_face: Vec<Option<(usize, usize)>>,
-    /// Faces per exact contact, active faces per (contact, group) in the last solve.
-    faces: Vec<usize>,
+    /// Active faces per (contact, group) in the last solve.
     active_faces: Vec<[usize; 2]>,
     /// Each second-order cone's (contact, group).
     soc_group: Vec<(usize, usize)>,
@@ -119,7 +118,6 @@ impl ExactSolver {
             })
             .collect();
         let nc = qp.contacts.len();
-        let mut faces = vec![0; nc];
         let inner_face = inner_qp
             .rows
             .iter()
@@ -127,7 +125,6 @@ impl ExactSolver {
                 RowId::Face { contact, face }
                     if matches!(qp.constraints.cones[contact], ConeRepr::Exact) =>
                 {
-                    faces[contact] += 1;
                     // SFCl: the first N faces meet the +mz pole (they bind when mz > 0,
                     // the form's first cone of the contact), the next N the −mz pole.
                     let group = match qp.contacts[contact].model {
@@ -147,14 +144,24 @@ impl ExactSolver {
         let inner = ActiveSetSolver::new(inner_qp, settings)?;
         let outer = ActiveSetSolver::new(polyhedral(&qp, &lin, circumscribed_cone), settings)?;
         let ipm = Ipm::new(&conic, IpmSettings::default());
-        let newton = Newton::new(&conic);
+        // Each cone's contact's minimum normal force row, in the conic form's rows.
+        let normal_row = conic
+            .soc_contacts
+            .iter()
+            .map(|&c| {
+                qp.rows
+                    .iter()
+                    .position(|r| *r == RowId::NormalForce { contact: c })
+                    .map(|i| conic.linear_at + i)
+            })
+            .collect();
+        let newton = Newton::new(&conic, normal_row);
         let rows = conic.rows();
         Ok(Self {
             ipm,
             inner,
             inner_row,
             inner_face,
-            faces,
             active_faces: vec![[0; 2]; nc],
             soc_group,
             newton,
@@ -206,9 +213,9 @@ impl ExactSolver {
         })
     }
 
-    /// The Newton guess from the inscribed optimum in `self.lin`; false for a contact
-    /// at the apex (all its faces active), where the cone is not smooth.
-    fn guess(&mut self, alpha: f64) -> bool {
+    /// The Newton guess from the inscribed optimum in `self.lin` (Newton reads a cone
+    /// at its apex off the iterate).
+    fn guess(&mut self, alpha: f64) {
         let nw = &mut self.newton;
         nw.active.iter_mut().for_each(|a| *a = false);
         self.active_faces.iter_mut().for_each(|c| *c = [0; 2]);
@@ -222,9 +229,6 @@ impl ExactSolver {
         }
         for (k, &(c, g)) in self.soc_group.iter().enumerate() {
             let [a, b] = self.active_faces[c];
-            if a + b == self.faces[c] {
-                return false;
-            }
             let on = if g == 0 { a } else { b };
             nw.piece[k] = if on > 0 {
                 Piece::Boundary
@@ -258,7 +262,6 @@ impl ExactSolver {
                 }
             }
         }
-        true
     }
 
     /// Newton from its current state (`hot`: a warm re-solve of the last answer's
@@ -361,13 +364,25 @@ impl TorqueSolver for ExactSolver {
             .solve_raw(w, &WarmStart::default(), &mut self.lin);
         out.iterations += self.lin.iterations;
         let feasible = self.lin.status == Status::Optimal;
-        if feasible && self.guess(alpha) && self.try_newton(w, alpha, false, out) {
-            return;
+        if feasible {
+            self.guess(alpha);
+            if self.try_newton(w, alpha, false, out) {
+                return;
+            }
         }
         if self.lin.status == Status::Infeasible {
             // 2. The circumscribed polyhedra.
             if let Some(reason) = self.outer_infeasible(w, PROOF_SIDES) {
                 return Self::infeasible(out, reason);
+            }
+            // Their optimum, just outside the cones, is a guess too (its rows are the
+            // inscribed view's, widened).
+            out.iterations += self.lin.iterations;
+            if self.lin.status == Status::Optimal {
+                self.guess(alpha);
+                if self.try_newton(w, alpha, false, out) {
+                    return;
+                }
             }
         }
         // 4. The interior-point fallback.

@@ -17,9 +17,14 @@
 //! few constraint rows. Then the guess is corrected like a primal active-set method: a
 //! violated inactive piece joins, a negative multiplier leaves. The conic dual is
 //! `z_i = ν_i` on rows and `z_k = ν_k (1, −u)` on a boundary (in K exactly when
-//! `ν_k ≥ 0`), so the caller's certificate checks the answer. A contact at the apex
-//! (where g is not differentiable), or a guess that does not converge, is left to the
-//! interior-point method.
+//! `ν_k ≥ 0`), so the caller's certificate checks the answer.
+//!
+//! A cone at its apex (an unloaded contact, or SFCl's edge `f_t = 0`), where g is not
+//! differentiable, is the piece `s_k = 0`: linear rows whose multipliers are the conic
+//! dual, which must lie in the dual cone. The apex is read off the iterate (the
+//! inscribed optimum's key set holds only independent faces, so it cannot say), or
+//! reached when a boundary's tail vanishes. A guess that does not converge is left to
+//! the interior-point method.
 //!
 //! Once Newton's steps shrink quadratically, the last ones are chord steps on the
 //! current factors (Shamanskii's variant): the factors would barely change.
@@ -42,6 +47,15 @@ const MAX_CHANGES: usize = 8;
 /// The error a chord re-solve stops at, relative to the iterate (the scaled problem's
 /// answer has size about 1): a hundredth of the certificate's tolerance.
 const CHORD_ERROR: f64 = 1e-11;
+/// A cone whose slack is this small against the iterate (the scaled problem's answer
+/// has size about 1) is at its apex.
+const APEX: f64 = 1e-9;
+/// A boundary piece this close to its apex during Newton's method is put at the apex.
+const NEAR_APEX: f64 = 1e-6;
+/// A row of a cone at its apex whose part independent of the constraints before it is
+/// below this, relative to the row (or to the largest row, for a row the iterate
+/// barely moves), is left out.
+const INDEPENDENT: f64 = 1e-8;
 
 /// Where a second-order cone is at the optimum.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,6 +64,8 @@ pub(crate) enum Piece {
     Inside,
     /// On its smooth boundary.
     Boundary,
+    /// At its apex: `s_k = 0`.
+    Apex,
 }
 
 /// How Newton's method on one guess ended.
@@ -60,6 +76,8 @@ enum Step {
     Negative,
     /// An inactive piece violated far beyond the step: add it before converging.
     Violated,
+    /// A boundary's tail vanished: the cone is at its apex.
+    AtApex(usize),
     Failed,
 }
 
@@ -68,6 +86,8 @@ enum Step {
 enum Owner {
     Row(usize),
     Cone(usize),
+    /// A row of a cone at its apex (its multiplier in `nu_row`, like a row's).
+    Apex(usize),
 }
 
 /// The Newton solver of one conic form, with its workspace.
@@ -79,6 +99,11 @@ pub(crate) struct Newton {
     orth: (usize, usize),
     /// Second-order cones: `(first row, dim)`.
     socs: Vec<(usize, usize)>,
+    /// The other cone of an SFCl contact, which shares this one's tail rows `(fx, fy)`.
+    pair: Vec<Option<usize>>,
+    /// Per cone, the nonnegative row of its contact's minimum normal force: implied by
+    /// the apex (`f = 0`), so it leaves the constraints there.
+    normal_row: Vec<Option<usize>>,
     /// Per row of the form: whether a nonnegative row is active.
     pub(crate) active: Vec<bool>,
     /// Per second-order cone.
@@ -93,6 +118,8 @@ pub(crate) struct Newton {
     null_basis_t: Matrix,
     /// Rows of A times N (rows × k); the equality rows unused.
     a_red: Matrix,
+    /// The largest entry of `a_red`.
+    a_scale: f64,
     /// Rows `eq..` of `a_red` column-major, for the pass over every slack.
     a_red_cols: Vec<f64>,
     /// `b − A x_p` and `x_p` are affine in the wrench, like b: their constant and
@@ -105,6 +132,8 @@ pub(crate) struct Newton {
     b_red: Vec<f64>,
     xp: Vec<f64>,
     y: Vec<f64>,
+    /// Whether `s` holds the slacks at the current `y` (one pass over every row saved).
+    slacks_at_y: bool,
     /// The iterate in the form's variables.
     pub(crate) x: Vec<f64>,
     pub(crate) z: Vec<f64>,
@@ -132,7 +161,9 @@ pub(crate) struct Newton {
 }
 
 impl Newton {
-    pub(crate) fn new(form: &ConicForm) -> Self {
+    /// `normal_row`: per second-order cone, the nonnegative row of its contact's
+    /// minimum normal force, if any.
+    pub(crate) fn new(form: &ConicForm, normal_row: Vec<Option<usize>>) -> Self {
         let (n, rows) = (form.nx, form.rows());
         let (mut eq, mut orth, mut socs) = (0, (0, 0), Vec::new());
         let mut row = 0;
@@ -185,7 +216,16 @@ impl Newton {
             }
         });
         let n = k;
-        let ncmax = (orth.1 - orth.0) + socs.len();
+        let ncmax = (orth.1 - orth.0) + socs.iter().map(|&(_, d)| d).sum::<usize>();
+        // SFCl's two cones are consecutive, and the only ones of their contact.
+        let pair = (0..socs.len())
+            .map(|k| {
+                let c = form.soc_contacts[k];
+                [k.wrapping_sub(1), k + 1]
+                    .into_iter()
+                    .find(|&j| form.soc_contacts.get(j) == Some(&c))
+            })
+            .collect();
         Self {
             b_red_cols: column_major(rows - eq, 7, |i, c| b_red_map[(eq + i, c)]),
             xp_cols: column_major(form.nx, 7, |j, c| xp_map[(j, c)]),
@@ -194,6 +234,7 @@ impl Newton {
             a_red_cols: (0..(rows - eq) * k)
                 .map(|x| a_red[(eq + x % (rows - eq), x / (rows - eq))])
                 .collect(),
+            a_scale: a_red.max_abs(),
             a_red,
             b_red: vec![0.0; rows],
             xp: vec![0.0; form.nx],
@@ -206,6 +247,9 @@ impl Newton {
             nu_row: vec![0.0; rows],
             nu_cone: vec![0.0; socs.len()],
             socs,
+            pair,
+            normal_row,
+            slacks_at_y: false,
             x: vec![0.0; form.nx],
             z: vec![0.0; rows],
             iterations: 0,
@@ -259,7 +303,7 @@ impl Newton {
             .x
             .iter_mut()
             .chain(&mut self.y)
-            .chain(&mut self.nu_row[self.orth.0..self.orth.1])
+            .chain(&mut self.nu_row)
             .chain(&mut self.nu_cone)
         {
             *v *= f;
@@ -292,10 +336,20 @@ impl Newton {
         b_red.iter_mut().for_each(|v| *v = 0.0);
         add_columns(b_red, &self.b_red_cols, &wt, 1.0);
         // y = Nᵀ x, unless hot: then y is the last answer's, rescaled with x.
+        self.slacks_at_y = false;
         if !hot {
             // (N's rows are Nᵀ's columns.)
             self.y.iter_mut().for_each(|v| *v = 0.0);
             add_columns(&mut self.y, self.null_basis.as_slice(), &self.x, 1.0);
+            // A cone whose slack vanishes is at its apex.
+            self.slacks();
+            let tol = APEX * norm_inf(&self.y).max(1.0);
+            for k in 0..self.socs.len() {
+                let (start, dim) = self.socs[k];
+                if self.s[start..start + dim].iter().all(|v| v.abs() <= tol) {
+                    self.set_apex(k);
+                }
+            }
         }
         for change in 0..MAX_CHANGES {
             let end = match (hot && change == 0, self.frozen) {
@@ -305,8 +359,14 @@ impl Newton {
                 },
                 _ => self.newton(),
             };
-            if end == Step::Failed {
-                return false;
+            match end {
+                Step::Failed => return false,
+                Step::AtApex(k) => {
+                    self.set_apex(k);
+                    self.frozen = None;
+                    continue;
+                }
+                _ => {}
             }
             self.slacks();
             let feas = self.feasibility_tolerance();
@@ -330,14 +390,20 @@ impl Newton {
             }
             if let (Step::Converged | Step::Violated, Some((_, o))) = (end, worst) {
                 match o {
-                    Owner::Row(i) => self.active[i] = true,
+                    Owner::Row(i) | Owner::Apex(i) => self.active[i] = true,
                     Owner::Cone(k) => self.piece[k] = Piece::Boundary,
                 }
                 self.frozen = None;
                 continue;
             }
             // The most negative multiplier leaves.
-            let numax = self.nu_row[self.orth.0..self.orth.1]
+            // (Past the nonnegative rows, `nu_row` holds the apex rows' multipliers.)
+            let last = if self.piece.contains(&Piece::Apex) {
+                self.nu_row.len()
+            } else {
+                self.orth.1
+            };
+            let numax = self.nu_row[self.orth.0..last]
                 .iter()
                 .chain(&self.nu_cone)
                 .fold(f64::MIN_POSITIVE, |a, v| a.max(v.abs()));
@@ -351,16 +417,18 @@ impl Newton {
                 }
             }
             for k in 0..self.socs.len() {
-                if self.piece[k] == Piece::Boundary && self.nu_cone[k] < -1e-12 * numax {
-                    let v = self.nu_cone[k];
-                    if most.is_none_or(|(m, _)| v < m) {
-                        most = Some((v, Owner::Cone(k)));
-                    }
+                let v = match self.piece[k] {
+                    Piece::Boundary => self.nu_cone[k],
+                    Piece::Apex => -self.apex_deficit(k),
+                    Piece::Inside => continue,
+                };
+                if v < -1e-12 * numax && most.is_none_or(|(m, _)| v < m) {
+                    most = Some((v, Owner::Cone(self.apex_leaving(k))));
                 }
             }
             if let Some((_, o)) = most {
                 match o {
-                    Owner::Row(i) => self.active[i] = false,
+                    Owner::Row(i) | Owner::Apex(i) => self.active[i] = false,
                     Owner::Cone(k) => self.piece[k] = Piece::Inside,
                 }
                 self.frozen = None;
@@ -384,6 +452,143 @@ impl Newton {
         self.dual();
     }
 
+    /// Puts cone k at its apex; its contact's minimum normal force row is then implied.
+    fn set_apex(&mut self, k: usize) {
+        self.piece[k] = Piece::Apex;
+        if let Some(r) = self.normal_row[k] {
+            self.active[r] = false;
+            self.nu_row[r] = 0.0;
+        }
+    }
+
+    /// The rows of cone k at its apex that are constraints: all, but only the head of
+    /// the second of an SFCl pair at the apex together (the tails are the same rows).
+    fn apex_rows(&self, k: usize) -> std::ops::Range<usize> {
+        let (start, dim) = self.socs[k];
+        match self.pair[k] {
+            Some(j) if j < k && self.piece[j] == Piece::Apex => start..start + 1,
+            _ => start..start + dim,
+        }
+    }
+
+    /// The conic dual of cone k at its apex, `(head, tail)` with the tail in `tail`:
+    /// its rows' multipliers. An SFCl pair at the apex together shares one tail
+    /// multiplier `ν_t`, split in proportion to the heads `ν_a`, `ν_b` (both duals are
+    /// then in their cones exactly when `ν_a, ν_b ≥ 0` and `ν_a + ν_b ≥ ‖ν_t‖`).
+    fn apex_dual(&self, k: usize, tail: &mut [f64]) -> f64 {
+        let (start, dim) = self.socs[k];
+        let head = self.nu_row[start];
+        let (first, share) = match self.pair[k] {
+            Some(j) if self.piece[j] == Piece::Apex => {
+                let other = self.nu_row[self.socs[j].0];
+                let sum = head + other;
+                let theta = if sum > 0.0 { head / sum } else { 0.5 };
+                (start.min(self.socs[j].0), theta)
+            }
+            _ => (start, 1.0),
+        };
+        for (t, v) in tail[..dim - 1]
+            .iter_mut()
+            .zip(&self.nu_row[first + 1..first + dim])
+        {
+            *t = share * v;
+        }
+        head
+    }
+
+    /// How far cone k's apex dual is outside the dual cone (≤ 0 inside).
+    fn apex_deficit(&self, k: usize) -> f64 {
+        let mut tail = [0.0; MAX_TAIL];
+        let head = self.apex_dual(k, &mut tail);
+        let (_, dim) = self.socs[k];
+        match self.pair[k] {
+            Some(j) if self.piece[j] == Piece::Apex => {
+                let other = self.nu_row[self.socs[j].0];
+                let (first, _) = self.socs[k.min(j)];
+                let t = soc_norm(&self.nu_row[first + 1..first + dim]);
+                (-head).max(-other).max(t - head - other)
+            }
+            _ => soc_norm(&tail[..dim - 1]) - head,
+        }
+    }
+
+    /// The cone that leaves the apex when cone k's apex dual is outside the dual cone:
+    /// k, or of an SFCl pair at the apex together, the one with the smaller head.
+    fn apex_leaving(&self, k: usize) -> usize {
+        match (self.piece[k], self.pair[k]) {
+            (Piece::Apex, Some(j)) if self.piece[j] == Piece::Apex => {
+                if self.nu_row[self.socs[j].0] < self.nu_row[self.socs[k].0] {
+                    j
+                } else {
+                    k
+                }
+            }
+            _ => k,
+        }
+    }
+
+    /// Appends the rows of the cones at their apex to the first `nc` constraints, each
+    /// only if independent of those before it (at the apex every row of the cone is
+    /// active, and some may be fixed by the wrench alone or by other rows: their
+    /// multipliers are then not determined, and are left at 0). Returns the new count.
+    fn apex_constraints(&mut self, mut nc: usize) -> usize {
+        let n = self.n;
+        // An orthonormal basis of the rows so far, in `ycols` (until `schur` fills it).
+        let mut basis = 0;
+        for r in 0..nc {
+            self.dx.copy_from_slice(&self.c[r * n..r * n + n]);
+            if self.orthogonalise(basis) {
+                basis += 1;
+            }
+        }
+        for k in 0..self.socs.len() {
+            if self.piece[k] != Piece::Apex {
+                continue;
+            }
+            for i in self.apex_rows(k) {
+                self.dx.copy_from_slice(self.a_red.row(i));
+                if !self.orthogonalise(basis) {
+                    self.nu_row[i] = 0.0;
+                    continue;
+                }
+                basis += 1;
+                self.c[nc * n..nc * n + n].copy_from_slice(self.a_red.row(i));
+                self.cval[nc] = -self.s[i];
+                self.owner[nc] = Owner::Apex(i);
+                nc += 1;
+            }
+        }
+        nc
+    }
+
+    /// Orthogonalises `dx` against the first `basis` rows of `ycols` (twice, Gram–Schmidt
+    /// being unstable once); if what is left is not negligible, normalised, it becomes
+    /// row `basis`. Whether it did.
+    fn orthogonalise(&mut self, basis: usize) -> bool {
+        let n = self.n;
+        let size = norm_inf(&self.dx);
+        for _ in 0..2 {
+            for q in self.ycols[..basis * n].chunks_exact(n) {
+                let d = dot4(q, &self.dx);
+                for (v, qj) in self.dx.iter_mut().zip(q) {
+                    *v -= d * qj;
+                }
+            }
+        }
+        let left = soc_norm(&self.dx);
+        // (A row the iterate barely moves is fixed by the wrench: not independent.)
+        if left.is_nan() || left <= INDEPENDENT * size.max(self.a_scale) {
+            return false;
+        }
+        for (q, v) in self.ycols[basis * n..(basis + 1) * n]
+            .iter_mut()
+            .zip(&self.dx)
+        {
+            *q = v / left;
+        }
+        true
+    }
+
     /// `Σ |c_j|` of the first `nc` Newton constraints at the trial point in `t`.
     fn violation(&self, nc: usize) -> f64 {
         let n = self.n;
@@ -391,7 +596,9 @@ impl Newton {
         let mut v = 0.0;
         for r in 0..nc {
             v += match self.owner[r] {
-                Owner::Row(i) => (self.b_red[i] - dot4(self.a_red.row(i), y)).abs(),
+                Owner::Row(i) | Owner::Apex(i) => {
+                    (self.b_red[i] - dot4(self.a_red.row(i), y)).abs()
+                }
                 Owner::Cone(k) => {
                     let (start, dim) = self.socs[k];
                     let s0 = self.b_red[start] - dot4(self.a_red.row(start), y);
@@ -430,6 +637,7 @@ impl Newton {
 
     /// `s = b − A x` on the inequality rows, in the reduced variables.
     fn slacks(&mut self) {
+        self.slacks_at_y = true;
         let eq = self.eq;
         self.s[eq..].copy_from_slice(&self.b_red[eq..]);
         add_columns(&mut self.s[eq..], &self.a_red_cols, &self.y, -1.0);
@@ -444,13 +652,21 @@ impl Newton {
             }
         }
         for (k, &(start, dim)) in self.socs.iter().enumerate() {
-            if self.piece[k] == Piece::Boundary {
-                let r = soc_norm(&self.s[start + 1..start + dim]);
-                let nu = self.nu_cone[k];
-                self.z[start] = nu;
-                for j in 1..dim {
-                    self.z[start + j] = -nu * self.s[start + j] / r;
+            match self.piece[k] {
+                Piece::Boundary => {
+                    let r = soc_norm(&self.s[start + 1..start + dim]);
+                    let nu = self.nu_cone[k];
+                    self.z[start] = nu;
+                    for j in 1..dim {
+                        self.z[start + j] = -nu * self.s[start + j] / r;
+                    }
                 }
+                Piece::Apex => {
+                    let mut tail = [0.0; MAX_TAIL];
+                    self.z[start] = self.apex_dual(k, &mut tail);
+                    self.z[start + 1..start + dim].copy_from_slice(&tail[..dim - 1]);
+                }
+                Piece::Inside => {}
             }
         }
     }
@@ -535,13 +751,14 @@ impl Newton {
             }
             for r in 0..nc {
                 match self.owner[r] {
-                    Owner::Row(i) => self.nu_row[i] += self.nu[r],
+                    Owner::Row(i) | Owner::Apex(i) => self.nu_row[i] += self.nu[r],
                     Owner::Cone(k) => self.nu_cone[k] += self.nu[r],
                 }
             }
             for (y, d) in self.y.iter_mut().zip(&self.dx) {
                 *y += d;
             }
+            self.slacks_at_y = false;
             if !self.y.iter().all(|v| v.is_finite()) {
                 return Step::Failed;
             }
@@ -590,7 +807,7 @@ impl Newton {
         }
         for r in 0..nc {
             match self.owner[r] {
-                Owner::Row(i) => {
+                Owner::Row(i) | Owner::Apex(i) => {
                     let ai = &a[i * n..i * n + n];
                     let si = self.b_red[i] - dot4(ai, y);
                     s[i] = si;
@@ -638,7 +855,7 @@ impl Newton {
         let (mut step, mut size) = (0.0f64, 1.0f64);
         for (r, d) in d[..nc].iter().enumerate() {
             let nu = match self.owner[r] {
-                Owner::Row(i) => self.nu_row[i],
+                Owner::Row(i) | Owner::Apex(i) => self.nu_row[i],
                 Owner::Cone(k) => self.nu_cone[k],
             };
             step = step.max(d.abs());
@@ -655,9 +872,12 @@ impl Newton {
         let mut last_pair = f64::INFINITY;
         // The factors below replace the frozen ones.
         self.kkt_inverse_valid = false;
+        let apex = self.piece.contains(&Piece::Apex);
         for it in 0..MAX_NEWTON {
             self.iterations += 1;
-            self.slacks();
+            if !self.slacks_at_y {
+                self.slacks();
+            }
             // Converging this guess cannot remove a violation far beyond the step, nor,
             // once the steps shrink quadratically (what is left to move is far below
             // the last step), one a few times the last step.
@@ -684,15 +904,22 @@ impl Newton {
             for j in 0..n {
                 self.h[j * n + j] = 2.0;
             }
-            for (k, &(start, dim)) in self.socs.iter().enumerate() {
+            for k in 0..self.socs.len() {
+                let (start, dim) = self.socs[k];
                 if self.piece[k] != Piece::Boundary {
                     continue;
                 }
                 let s1 = &self.s[start + 1..start + dim];
                 let r = soc_norm(s1);
-                if r.is_nan() || r <= 1e-12 * (self.s[start].abs() + r) {
-                    // At the apex g is not differentiable.
+                if r.is_nan() {
                     return Step::Failed;
+                }
+                if r <= 1e-12 * (self.s[start].abs() + r)
+                    || r + self.s[start].abs() <= NEAR_APEX * norm_inf(&self.y).max(1.0)
+                {
+                    // At the apex g is not differentiable; near it, its curvature ν/r
+                    // grows without bound and Newton crawls.
+                    return Step::AtApex(k);
                 }
                 let row = &mut self.c[nc * n..nc * n + n];
                 row.copy_from_slice(self.a_red.row(start));
@@ -753,6 +980,9 @@ impl Newton {
                     }
                 }
             }
+            if apex {
+                nc = self.apex_constraints(nc);
+            }
             if !cholesky(&mut self.h, n) {
                 return Step::Failed;
             }
@@ -788,7 +1018,7 @@ impl Newton {
             }
             for r in 0..nc {
                 let old = match self.owner[r] {
-                    Owner::Row(i) => &mut self.nu_row[i],
+                    Owner::Row(i) | Owner::Apex(i) => &mut self.nu_row[i],
                     Owner::Cone(k) => &mut self.nu_cone[k],
                 };
                 let d = alpha * (self.nu[r] - *old);
@@ -802,6 +1032,7 @@ impl Newton {
             for (y, d) in self.y.iter_mut().zip(&self.dx) {
                 *y += d;
             }
+            self.slacks_at_y = false;
             let step = norm_inf(&self.dx);
             let previous = last_step;
             before_last = last_step;
@@ -828,17 +1059,26 @@ impl Newton {
             // A clearly negative multiplier: this guess is wrong, change it now. After
             // the first step only one far below zero counts (a tenth of the largest:
             // the start's multipliers came from the polyhedra), after that any below
-            // rounding.
+            // rounding. With a cone at its apex, only after a full step: an apex's
+            // multipliers start from zero, not from the polyhedra, and a damped step
+            // leaves every multiplier part way to its new value.
             {
                 // On the multipliers as stored (damped by the step), which the caller's
                 // correction reads.
                 let stored = |r: usize| match self.owner[r] {
-                    Owner::Row(i) => self.nu_row[i],
+                    Owner::Row(i) | Owner::Apex(i) => self.nu_row[i],
                     Owner::Cone(k) => self.nu_cone[k],
                 };
                 let numax = (0..nc).fold(f64::MIN_POSITIVE, |a, r| a.max(stored(r).abs()));
                 let bar = if it == 0 { 0.1 } else { 1e-6 };
-                if (0..nc).any(|r| stored(r) < -bar * numax) {
+                // (An apex's rows may have either sign: its dual cone decides.)
+                let negative = (0..nc)
+                    .any(|r| !matches!(self.owner[r], Owner::Apex(_)) && stored(r) < -bar * numax);
+                let outside = apex
+                    && (0..self.socs.len()).any(|k| {
+                        self.piece[k] == Piece::Apex && self.apex_deficit(k) > bar * numax
+                    });
+                if (negative || outside) && (alpha == 1.0 || !apex) {
                     return Step::Negative;
                 }
             }

@@ -192,6 +192,53 @@ fn grasps_at_the_edge_of_feasibility_are_proved_infeasible_by_a_dual_ray() {
     }
 }
 
+/// Grasps at a quarter of the friction whose optimum holds a cone at its apex: an
+/// unloaded contact, or an SFCl contact on the edge `f_t = 0` of its cone. Found by a
+/// sweep twenty times wider than the one above (seeds 0..6000 at normal friction,
+/// 10000..16000 at a quarter of it). The inscribed optimum's key set cannot say so
+/// (it holds independent faces only), so Newton failed there and the interior-point
+/// method stalled: `numerical_failure`, where Clarabel finds the optimum. Newton now
+/// reads the apex off the iterate, or puts a boundary there when its tail vanishes.
+#[test]
+fn cones_at_their_apex_are_solved_by_newton() {
+    for seed in [10543, 10870, 11147, 14815] {
+        let p = grasp(seed, 0.25);
+        let native = run(&p, Backend::ActiveSet, Cones::Exact);
+        assert_eq!(
+            native.status,
+            Status::Optimal,
+            "seed {seed}: {:?}",
+            native.reason
+        );
+        assert_eq!(native.method, Some("newton"), "seed {seed}");
+        // Some contact's tangential force vanishes against the largest force.
+        let f = &native.contact_forces;
+        let fmax = f.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let mut off = 0;
+        let mut at_apex = 0;
+        for c in &p.contacts {
+            let d = c.dim();
+            if d >= 3 && f[off].hypot(f[off + 1]) <= 1e-8 * fmax {
+                at_apex += 1;
+            }
+            off += d;
+        }
+        assert!(at_apex >= 1, "seed {seed}: {f:?}");
+        #[cfg(feature = "clarabel")]
+        {
+            let clarabel = run(&p, Backend::Clarabel, Cones::Exact);
+            assert_eq!(clarabel.status, Status::Optimal, "seed {seed}");
+            let r = rel(native.objective, clarabel.objective);
+            assert!(
+                r <= 1e-7,
+                "seed {seed}: {} vs {}",
+                native.objective,
+                clarabel.objective
+            );
+        }
+    }
+}
+
 /// The inscribed linearisations bracket σ* from above and close in on it as N grows;
 /// the native optimum is in its exact cones.
 #[test]

@@ -385,6 +385,10 @@ fn an_unloaded_contact_sits_at_the_apex() {
     assert!(f2.iter().all(|v| v.abs() < 1e-9), "{f2:?}");
     assert_eq!(s.diagnostics.friction_margins[2], None);
     assert!(s.diagnostics.friction_margins[0].is_some());
+    // Newton holds that cone at its apex, with a certificate.
+    let exact = run(&p, Backend::ActiveSet, true);
+    assert!(exact.is_optimal(), "{:?}", exact.reason);
+    assert_eq!(exact.method, Some("newton"));
 }
 
 /// Two identical contacts split the load: [G; Jᵀ] gains a null space, and every
