@@ -916,9 +916,11 @@ impl Newton {
                 }
                 if r <= 1e-12 * (self.s[start].abs() + r)
                     || r + self.s[start].abs() <= NEAR_APEX * norm_inf(&self.y).max(1.0)
+                    || self.s[start] <= -r
                 {
                     // At the apex g is not differentiable; near it, its curvature ν/r
-                    // grows without bound and Newton crawls.
+                    // grows without bound and Newton crawls; and from s in −K (past the
+                    // apex) the nearest point of the cone is the apex.
                     return Step::AtApex(k);
                 }
                 let row = &mut self.c[nc * n..nc * n + n];
