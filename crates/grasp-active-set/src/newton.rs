@@ -299,14 +299,10 @@ impl Newton {
     /// Scales the iterate and multipliers by `f` (the scaled problem's answer moves
     /// with 1/α when the right-hand side's magnitude α changes).
     pub(crate) fn rescale(&mut self, f: f64) {
-        for v in self
-            .x
-            .iter_mut()
-            .chain(&mut self.y)
-            .chain(&mut self.nu_row)
-            .chain(&mut self.nu_cone)
-        {
-            *v *= f;
+        // (Past the nonnegative rows, `nu_row` holds the apex rows' multipliers.)
+        let nu_row = &mut self.nu_row[self.orth.0..];
+        for part in [&mut self.x[..], &mut self.y, nu_row, &mut self.nu_cone] {
+            part.iter_mut().for_each(|v| *v *= f);
         }
     }
 
@@ -403,10 +399,9 @@ impl Newton {
             } else {
                 self.orth.1
             };
-            let numax = self.nu_row[self.orth.0..last]
-                .iter()
-                .chain(&self.nu_cone)
-                .fold(f64::MIN_POSITIVE, |a, v| a.max(v.abs()));
+            let numax = norm_inf(&self.nu_row[self.orth.0..last])
+                .max(norm_inf(&self.nu_cone))
+                .max(f64::MIN_POSITIVE);
             let mut most: Option<(f64, Owner)> = None;
             for i in self.orth.0..self.orth.1 {
                 if self.active[i] && self.nu_row[i] < -1e-12 * numax {
