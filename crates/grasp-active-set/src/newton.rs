@@ -108,6 +108,15 @@ pub(crate) struct Newton {
     pub(crate) active: Vec<bool>,
     /// Per second-order cone.
     pub(crate) piece: Vec<Piece>,
+    /// Per cone, whether it left its apex in this solve (its dual outside the dual
+    /// cone): it goes back there only exactly at the apex, not near it, so that the
+    /// guess cannot cycle.
+    left_apex: Vec<bool>,
+    /// Per cone that left its apex, the direction u of its tail (`MAX_TAIL` each).
+    hint: Vec<f64>,
+    /// Per cone, whether the current Newton step holds it to that tangent plane (its
+    /// step is then no Newton step of the cone: no chord steps follow).
+    tangent: Vec<bool>,
     /// Multipliers per row and per cone.
     pub(crate) nu_row: Vec<f64>,
     pub(crate) nu_cone: Vec<f64>,
@@ -244,6 +253,9 @@ impl Newton {
             orth,
             active: vec![false; rows],
             piece: vec![Piece::Inside; socs.len()],
+            left_apex: vec![false; socs.len()],
+            hint: vec![0.0; socs.len() * MAX_TAIL],
+            tangent: vec![false; socs.len()],
             nu_row: vec![0.0; rows],
             nu_cone: vec![0.0; socs.len()],
             socs,
@@ -333,6 +345,7 @@ impl Newton {
         add_columns(b_red, &self.b_red_cols, &wt, 1.0);
         // y = Nᵀ x, unless hot: then y is the last answer's, rescaled with x.
         self.slacks_at_y = false;
+        self.left_apex.iter_mut().for_each(|v| *v = false);
         if !hot {
             // (N's rows are Nᵀ's columns.)
             self.y.iter_mut().for_each(|v| *v = 0.0);
@@ -424,7 +437,20 @@ impl Newton {
             if let Some((_, o)) = most {
                 match o {
                     Owner::Row(i) | Owner::Apex(i) => self.active[i] = false,
-                    Owner::Cone(k) => self.piece[k] = Piece::Inside,
+                    Owner::Cone(k) => match (self.piece[k], self.pair[k]) {
+                        // An SFCl cone at its apex whose tail multiplier outweighs its
+                        // head: with the other cone at the apex too (the contact
+                        // unloaded) the heads share the tail.
+                        (Piece::Apex, Some(j))
+                            if self.piece[j] != Piece::Apex
+                                && !self.left_apex[j]
+                                && self.nu_row[self.socs[k].0] >= 0.0 =>
+                        {
+                            self.set_apex(j);
+                        }
+                        (Piece::Apex, _) => self.leave_apex(k),
+                        _ => self.piece[k] = Piece::Inside,
+                    },
                 }
                 self.frozen = None;
                 continue;
@@ -445,6 +471,26 @@ impl Newton {
         x.copy_from_slice(&self.xp);
         add_columns(x, self.null_basis_t.as_slice(), &self.y, 1.0);
         self.dual();
+    }
+
+    /// Cone k leaves its apex, its dual outside the dual cone: to the boundary, along
+    /// the direction the dual's tail gives (`z = ν (1, −u)` there), when the tail
+    /// outweighs the head; inside otherwise.
+    fn leave_apex(&mut self, k: usize) {
+        let mut tail = [0.0; MAX_TAIL];
+        let head = self.apex_dual(k, &mut tail);
+        let (_, dim) = self.socs[k];
+        let t = soc_norm(&tail[..dim - 1]);
+        self.left_apex[k] = true;
+        if t > head.max(0.0) {
+            for (h, z) in self.hint[k * MAX_TAIL..].iter_mut().zip(&tail[..dim - 1]) {
+                *h = -z / t;
+            }
+            self.piece[k] = Piece::Boundary;
+            self.nu_cone[k] = t;
+        } else {
+            self.piece[k] = Piece::Inside;
+        }
     }
 
     /// Puts cone k at its apex; its contact's minimum normal force row is then implied.
@@ -602,7 +648,19 @@ impl Newton {
                         let sj = self.b_red[start + j] - dot4(self.a_red.row(start + j), y);
                         q += sj * sj;
                     }
-                    (q.sqrt() - s0).abs()
+                    let g = if self.tangent[k] {
+                        // On its tangent plane: the plane's equation.
+                        let u = &self.hint[k * MAX_TAIL..];
+                        (1..dim)
+                            .map(|j| {
+                                u[j - 1]
+                                    * (self.b_red[start + j] - dot4(self.a_red.row(start + j), y))
+                            })
+                            .sum::<f64>()
+                    } else {
+                        q.sqrt()
+                    };
+                    (g - s0).abs()
                 }
             };
         }
@@ -868,6 +926,9 @@ impl Newton {
         // The factors below replace the frozen ones.
         self.kkt_inverse_valid = false;
         let apex = self.piece.contains(&Piece::Apex);
+        // Only a cone that left its apex can be held to a tangent plane.
+        let left_apex = self.left_apex.contains(&true);
+        self.tangent.iter_mut().for_each(|t| *t = false);
         for it in 0..MAX_NEWTON {
             self.iterations += 1;
             if !self.slacks_at_y {
@@ -909,17 +970,39 @@ impl Newton {
                 if r.is_nan() {
                     return Step::Failed;
                 }
-                if r <= 1e-12 * (self.s[start].abs() + r)
-                    || r + self.s[start].abs() <= NEAR_APEX * norm_inf(&self.y).max(1.0)
-                    || self.s[start] <= -r
-                {
+                let near = r + self.s[start].abs() <= NEAR_APEX * norm_inf(&self.y).max(1.0)
+                    || self.s[start] <= -r;
+                let tangent = left_apex
+                    && self.left_apex[k]
+                    && (self.s[start] <= 0.0 || r <= 1e-12 * self.s[start]);
+                if left_apex {
+                    self.tangent[k] = tangent;
+                }
+                if !tangent && (r <= 1e-12 * (self.s[start].abs() + r) || near) {
                     // At the apex g is not differentiable; near it, its curvature ν/r
                     // grows without bound and Newton crawls; and from s in −K (past the
                     // apex) the nearest point of the cone is the apex.
                     return Step::AtApex(k);
                 }
+                // A cone that left its apex, while still near it, is held to the
+                // tangent plane along the direction its apex dual gave (linear, no
+                // curvature): from the apex, s1's own direction means nothing.
                 let row = &mut self.c[nc * n..nc * n + n];
                 row.copy_from_slice(self.a_red.row(start));
+                self.owner[nc] = Owner::Cone(k);
+                if tangent {
+                    let u = &self.hint[k * MAX_TAIL..];
+                    let mut along = 0.0;
+                    for j in 1..dim {
+                        along += u[j - 1] * s1[j - 1];
+                        for (c, a) in row.iter_mut().zip(self.a_red.row(start + j)) {
+                            *c -= u[j - 1] * a;
+                        }
+                    }
+                    self.cval[nc] = along - self.s[start];
+                    nc += 1;
+                    continue;
+                }
                 for j in 1..dim {
                     let u = s1[j - 1] / r;
                     for (c, a) in row.iter_mut().zip(self.a_red.row(start + j)) {
@@ -927,7 +1010,6 @@ impl Newton {
                     }
                 }
                 self.cval[nc] = r - self.s[start];
-                self.owner[nc] = Owner::Cone(k);
                 nc += 1;
                 let nu = self.nu_cone[k];
                 if nu <= 0.0 {
@@ -1001,7 +1083,13 @@ impl Newton {
             let f0: f64 = self.y.iter().map(|v| v * v).sum();
             let slope = 2.0 * dot4(&self.y, &self.dx) - rho * viol0;
             let mut alpha = 1.0;
-            for _ in 0..30 {
+            // A full step that leaves the point where it is (the guess changed its
+            // constraints, not the point: a cone put at the apex it is at) is taken
+            // as it is: the merit only sees rounding there, and the multipliers need
+            // the whole step.
+            let full_step = norm_inf(&self.dx);
+            let still = apex && full_step <= 1e-10 * norm_inf(&self.y).max(1.0);
+            for _ in 0..if still { 0 } else { 30 } {
                 for (t, (y, d)) in self.t[..n].iter_mut().zip(self.y.iter().zip(&self.dx)) {
                     *t = y + alpha * d;
                 }
@@ -1042,7 +1130,9 @@ impl Newton {
             // step of 1e-7 that shrank ×100 from the last leaves an error near 1e-14.
             let scale = norm_inf(&self.y).max(1.0);
             let quadratic = alpha == 1.0 && step <= 1e-7 * scale && step <= 1e-2 * previous;
-            if step <= 1e-10 * scale || quadratic {
+            // (The full step: a line search that collapsed is no convergence.)
+            let tangent = left_apex && self.tangent.contains(&true);
+            if (full_step <= 1e-10 * scale || quadratic) && !tangent {
                 self.frozen = Some(nc);
                 return Step::Converged;
             }
@@ -1085,7 +1175,7 @@ impl Newton {
             // After Newton's step s_j the error is about the first chord step c, and a
             // chord step contracts it by about K s_j with K ≈ c / s_j² (quadratic
             // convergence): c / s_j, the rate the chord measures against s_j.
-            if alpha == 1.0 && contraction <= 0.05 {
+            if alpha == 1.0 && contraction <= 0.05 && !tangent {
                 self.frozen = Some(nc);
                 match self.chord(nc, false, pair) {
                     Step::Converged => return Step::Converged,

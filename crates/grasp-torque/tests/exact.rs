@@ -239,6 +239,39 @@ fn cones_at_their_apex_are_solved_by_newton() {
     }
 }
 
+/// Cones the inscribed optimum puts at their apex while the exact optimum is not
+/// quite there (normal friction, from the wider sweep). Seed 337: the cone is at its
+/// apex, and Newton's first step, which only moves the multipliers, is taken whole.
+/// Seed 900: the apex's dual leaves the dual cone, so the cone goes to its boundary,
+/// first along the tangent plane that dual points to. Both went to the interior-point
+/// method before.
+#[test]
+fn cones_that_leave_their_apex_are_solved_by_newton() {
+    for seed in [337, 900] {
+        let p = grasp(seed, 1.0);
+        let native = run(&p, Backend::ActiveSet, Cones::Exact);
+        assert_eq!(
+            native.status,
+            Status::Optimal,
+            "seed {seed}: {:?}",
+            native.reason
+        );
+        assert_eq!(native.method, Some("newton"), "seed {seed}");
+        #[cfg(feature = "clarabel")]
+        {
+            let clarabel = run(&p, Backend::Clarabel, Cones::Exact);
+            assert_eq!(clarabel.status, Status::Optimal, "seed {seed}");
+            let r = rel(native.objective, clarabel.objective);
+            assert!(
+                r <= 1e-7,
+                "seed {seed}: {} vs {}",
+                native.objective,
+                clarabel.objective
+            );
+        }
+    }
+}
+
 /// The inscribed linearisations bracket σ* from above and close in on it as N grows;
 /// the native optimum is in its exact cones.
 #[test]
