@@ -439,12 +439,13 @@ impl Newton {
                     Owner::Row(i) | Owner::Apex(i) => self.active[i] = false,
                     Owner::Cone(k) => match (self.piece[k], self.pair[k]) {
                         // An SFCl cone at its apex whose tail multiplier outweighs its
-                        // head: with the other cone at the apex too (the contact
-                        // unloaded) the heads share the tail.
+                        // head, with the other cone near its apex too: with both there
+                        // (the contact unloaded) the heads share the tail.
                         (Piece::Apex, Some(j))
                             if self.piece[j] != Piece::Apex
                                 && !self.left_apex[j]
-                                && self.nu_row[self.socs[k].0] >= 0.0 =>
+                                && self.nu_row[self.socs[k].0] >= 0.0
+                                && self.near_apex(j) =>
                         {
                             self.set_apex(j);
                         }
@@ -491,6 +492,13 @@ impl Newton {
         } else {
             self.piece[k] = Piece::Inside;
         }
+    }
+
+    /// Whether cone k's slack is within [`NEAR_APEX`] of its apex.
+    fn near_apex(&self, k: usize) -> bool {
+        let (start, dim) = self.socs[k];
+        let tol = NEAR_APEX * norm_inf(&self.y).max(1.0);
+        self.s[start..start + dim].iter().all(|v| v.abs() <= tol)
     }
 
     /// Puts cone k at its apex; its contact's minimum normal force row is then implied.
