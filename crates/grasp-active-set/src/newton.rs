@@ -982,7 +982,7 @@ impl Newton {
                     || self.s[start] <= -r;
                 let tangent = left_apex
                     && self.left_apex[k]
-                    && (self.s[start] <= 0.0 || r <= 1e-12 * self.s[start]);
+                    && (near || self.s[start] <= 0.0 || r <= 1e-12 * self.s[start]);
                 if left_apex {
                     self.tangent[k] = tangent;
                 }
