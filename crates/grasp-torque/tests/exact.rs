@@ -203,14 +203,7 @@ fn grasps_at_the_edge_of_feasibility_are_proved_infeasible_by_a_dual_ray() {
 fn cones_at_their_apex_are_solved_by_newton() {
     for seed in [10543, 10870, 11147, 14815] {
         let p = grasp(seed, 0.25);
-        let native = run(&p, Backend::ActiveSet, Cones::Exact);
-        assert_eq!(
-            native.status,
-            Status::Optimal,
-            "seed {seed}: {:?}",
-            native.reason
-        );
-        assert_eq!(native.method, Some("newton"), "seed {seed}");
+        let native = newton_like_clarabel(&p, seed);
         // Some contact's tangential force vanishes against the largest force.
         let f = &native.contact_forces;
         let fmax = f.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -224,19 +217,33 @@ fn cones_at_their_apex_are_solved_by_newton() {
             off += d;
         }
         assert!(at_apex >= 1, "seed {seed}: {f:?}");
-        #[cfg(feature = "clarabel")]
-        {
-            let clarabel = run(&p, Backend::Clarabel, Cones::Exact);
-            assert_eq!(clarabel.status, Status::Optimal, "seed {seed}");
-            let r = rel(native.objective, clarabel.objective);
-            assert!(
-                r <= 1e-7,
-                "seed {seed}: {} vs {}",
-                native.objective,
-                clarabel.objective
-            );
-        }
     }
+}
+
+/// The exact answer for `p`, asserted optimal by Newton and, when Clarabel is built,
+/// within 1e-7 of Clarabel's σ.
+fn newton_like_clarabel(p: &GraspProblem, seed: u64) -> Solution {
+    let native = run(p, Backend::ActiveSet, Cones::Exact);
+    assert_eq!(
+        native.status,
+        Status::Optimal,
+        "seed {seed}: {:?}",
+        native.reason
+    );
+    assert_eq!(native.method, Some("newton"), "seed {seed}");
+    #[cfg(feature = "clarabel")]
+    {
+        let clarabel = run(p, Backend::Clarabel, Cones::Exact);
+        assert_eq!(clarabel.status, Status::Optimal, "seed {seed}");
+        let r = rel(native.objective, clarabel.objective);
+        assert!(
+            r <= 1e-7,
+            "seed {seed}: {} vs {}",
+            native.objective,
+            clarabel.objective
+        );
+    }
+    native
 }
 
 /// Cones the inscribed optimum puts at their apex while the exact optimum is not
@@ -248,27 +255,7 @@ fn cones_at_their_apex_are_solved_by_newton() {
 #[test]
 fn cones_that_leave_their_apex_are_solved_by_newton() {
     for seed in [337, 900] {
-        let p = grasp(seed, 1.0);
-        let native = run(&p, Backend::ActiveSet, Cones::Exact);
-        assert_eq!(
-            native.status,
-            Status::Optimal,
-            "seed {seed}: {:?}",
-            native.reason
-        );
-        assert_eq!(native.method, Some("newton"), "seed {seed}");
-        #[cfg(feature = "clarabel")]
-        {
-            let clarabel = run(&p, Backend::Clarabel, Cones::Exact);
-            assert_eq!(clarabel.status, Status::Optimal, "seed {seed}");
-            let r = rel(native.objective, clarabel.objective);
-            assert!(
-                r <= 1e-7,
-                "seed {seed}: {} vs {}",
-                native.objective,
-                clarabel.objective
-            );
-        }
+        newton_like_clarabel(&grasp(seed, 1.0), seed);
     }
 }
 
