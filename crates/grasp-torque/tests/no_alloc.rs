@@ -49,18 +49,34 @@ fn solves_reuse_the_workspace(cones: Cones) {
         cones,
         ..Default::default()
     };
-    for name in [
+    let fixtures = [
         "paper-example",
         "hand5-pcwf",
         "hand4-sfcl",
         "hand4-sfce",
         "hand5-mixed",
-    ] {
-        let p = load_problem(format!(
+    ]
+    .map(|name| {
+        let path = format!(
             "{}/fixtures/{name}.json",
             concat!(env!("CARGO_MANIFEST_DIR"), "/../..")
-        ))
-        .unwrap();
+        );
+        (name.to_string(), load_problem(path).unwrap())
+    });
+    // With exact cones, grasps whose optimum holds a cone at its apex too (Newton's
+    // apex rows and their basis use the solver's buffers).
+    let apex = [(10543, 0.25), (337, 1.0)].map(|(seed, friction)| {
+        (
+            format!("seed {seed}"),
+            grasp_testkit::sweep_grasp(seed, friction),
+        )
+    });
+    let apex = if cones == Cones::Exact {
+        &apex[..]
+    } else {
+        &[]
+    };
+    for (name, p) in fixtures.iter().chain(apex) {
         let mut s = GraspSolver::new(&p, &config).unwrap();
         let mut lazy = GraspSolver::new(&p, &config)
             .unwrap()
