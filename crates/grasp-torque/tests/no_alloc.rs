@@ -77,8 +77,8 @@ fn solves_reuse_the_workspace(cones: Cones) {
         &[]
     };
     for (name, p) in fixtures.iter().chain(apex) {
-        let mut s = GraspSolver::new(&p, &config).unwrap();
-        let mut lazy = GraspSolver::new(&p, &config)
+        let mut s = GraspSolver::new(p, &config).unwrap();
+        let mut lazy = GraspSolver::new(p, &config)
             .unwrap()
             .with_check(Check::Lazy);
         let mut w = p.wrench;
