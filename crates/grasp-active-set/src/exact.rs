@@ -15,8 +15,9 @@
 //!    answer that passes is `optimal` (`method: "newton"`);
 //! 4. otherwise (a guess Newton cannot correct or does not converge from) falls back
 //!    to the dense interior-point method of [`crate::ipm`] on the same form,
-//!    certificate-checked the same way (`method: "interior_point"`). A run that fails ends `infeasible` when its
-//!    multipliers have grown along a ray of the dual that proves it
+//!    certificate-checked the same way (`method: "interior_point"`). A run that fails
+//!    ends `infeasible` when its multipliers have grown along a ray of the dual that
+//!    proves it
 //!    ([`ConicForm::dual_ray`], `Reason::DualRay`), or against finer circumscribed
 //!    polyhedra (`N = 256`, within 8e-5 of the cones).
 //!
@@ -213,8 +214,15 @@ impl ExactSolver {
         })
     }
 
-    /// The Newton guess from the inscribed optimum in `self.lin` (Newton reads a cone
-    /// at its apex off the iterate).
+    /// Newton from the polyhedral optimum in `self.lin` (inscribed or circumscribed:
+    /// their rows are the same, widened), its guess read off the key set (Newton reads
+    /// a cone at its apex off the iterate); on a certified answer fills `out`.
+    fn newton_from_polyhedra(&mut self, w: &[f64; 6], alpha: f64, out: &mut Solution) -> bool {
+        self.guess(alpha);
+        self.try_newton(w, alpha, false, out)
+    }
+
+    /// The Newton guess from the polyhedral optimum in `self.lin`.
     fn guess(&mut self, alpha: f64) {
         let nw = &mut self.newton;
         nw.active.iter_mut().for_each(|a| *a = false);
@@ -364,25 +372,18 @@ impl TorqueSolver for ExactSolver {
             .solve_raw(w, &WarmStart::default(), &mut self.lin);
         out.iterations += self.lin.iterations;
         let feasible = self.lin.status == Status::Optimal;
-        if feasible {
-            self.guess(alpha);
-            if self.try_newton(w, alpha, false, out) {
-                return;
-            }
+        if feasible && self.newton_from_polyhedra(w, alpha, out) {
+            return;
         }
         if self.lin.status == Status::Infeasible {
             // 2. The circumscribed polyhedra.
             if let Some(reason) = self.outer_infeasible(w, PROOF_SIDES) {
                 return Self::infeasible(out, reason);
             }
-            // Their optimum, just outside the cones, is a guess too (its rows are the
-            // inscribed view's, widened).
+            // Their optimum, just outside the cones, is a guess too.
             out.iterations += self.lin.iterations;
-            if self.lin.status == Status::Optimal {
-                self.guess(alpha);
-                if self.try_newton(w, alpha, false, out) {
-                    return;
-                }
+            if self.lin.status == Status::Optimal && self.newton_from_polyhedra(w, alpha, out) {
+                return;
             }
         }
         // 4. The interior-point fallback.
