@@ -398,6 +398,16 @@ impl Newton {
                 }
             }
             if let (Step::Converged | Step::Violated, Some((_, o))) = (end, worst) {
+                // A piece whose constraint depends on the current ones at this point
+                // (more active pieces than free directions, say) replaces the one whose
+                // multiplier its own would drive to zero first.
+                if let (Step::Converged, Some(nc)) = (end, self.frozen) {
+                    match self.replaced_by(o, nc) {
+                        Some(Owner::Row(i)) => self.active[i] = false,
+                        Some(Owner::Cone(k)) => self.piece[k] = Piece::Inside,
+                        _ => {}
+                    }
+                }
                 match o {
                     Owner::Row(i) | Owner::Apex(i) => self.active[i] = true,
                     Owner::Cone(k) => self.piece[k] = Piece::Boundary,
@@ -463,6 +473,70 @@ impl Newton {
             return true;
         }
         false
+    }
+
+    /// When the constraint of piece `new` (violated at the converged point) depends on
+    /// the `nc` constraints of the last Newton step, the one it replaces, as in the
+    /// dual active-set method (Goldfarb and Idnani): with `∇c_new = Σ r_j ∇c_j`,
+    /// raising its multiplier by t moves each `ν_j` by `−t r_j`, and the first to reach
+    /// zero, `min ν_j / r_j` over `r_j > 0`, leaves. None if independent, or if no
+    /// multiplier would reach zero. Reads the frozen factors (L, Y = L⁻¹Cᵀ, and S's).
+    fn replaced_by(&mut self, new: Owner, nc: usize) -> Option<Owner> {
+        let n = self.n;
+        if nc == 0 {
+            return None;
+        }
+        // ∇c_new into `dx` (as `newton` forms its constraint rows), at the current slacks.
+        match new {
+            Owner::Row(i) | Owner::Apex(i) => self.dx.copy_from_slice(self.a_red.row(i)),
+            Owner::Cone(k) => {
+                let (start, dim) = self.socs[k];
+                let r = soc_norm(&self.s[start + 1..start + dim]);
+                if r.is_nan() || r <= 0.0 {
+                    return None;
+                }
+                self.dx.copy_from_slice(self.a_red.row(start));
+                for j in 1..dim {
+                    let u = self.s[start + j] / r;
+                    for (c, a) in self.dx.iter_mut().zip(self.a_red.row(start + j)) {
+                        *c -= u * a;
+                    }
+                }
+            }
+        }
+        // v = L⁻¹ ∇c_new; r = S⁻¹ Yᵀ v, the H⁻¹-weighted least-squares coefficients.
+        forward(&self.h, n, &mut self.dx);
+        let size = soc_norm(&self.dx);
+        for q in 0..nc {
+            self.nu[q] = dot4(&self.ycols[q * n..q * n + n], &self.dx);
+        }
+        forward(&self.schur[..nc * nc], nc, &mut self.nu[..nc]);
+        backward(&self.schur[..nc * nc], nc, &mut self.nu[..nc]);
+        for q in 0..nc {
+            let f = self.nu[q];
+            for (d, y) in self.dx.iter_mut().zip(&self.ycols[q * n..q * n + n]) {
+                *d -= f * y;
+            }
+        }
+        let left = soc_norm(&self.dx);
+        if left.is_nan() || left > INDEPENDENT * size {
+            return None;
+        }
+        let mut best: Option<(f64, Owner)> = None;
+        for q in 0..nc {
+            let (r, nu) = match self.owner[q] {
+                Owner::Row(i) => (self.nu[q], self.nu_row[i]),
+                Owner::Cone(k) if !self.tangent[k] => (self.nu[q], self.nu_cone[k]),
+                _ => continue,
+            };
+            if r > 0.0 {
+                let t = nu.max(0.0) / r;
+                if best.is_none_or(|(b, _)| t < b) {
+                    best = Some((t, self.owner[q]));
+                }
+            }
+        }
+        best.map(|(_, o)| o)
     }
 
     /// `x = x_p + N y`, and the conic dual on the inequality rows (the certificate
@@ -980,8 +1054,13 @@ impl Newton {
                 }
                 let near = r + self.s[start].abs() <= NEAR_APEX * norm_inf(&self.y).max(1.0)
                     || self.s[start] <= -r;
+                // (Only from the apex, on the first step, and while it stays there: a
+                // cone released to its boundary that nears the apex again is the apex
+                // piece again. Back on the plane, Newton alternated between plane and
+                // boundary without converging.)
                 let tangent = left_apex
                     && self.left_apex[k]
+                    && (it == 0 || self.tangent[k])
                     && (near || self.s[start] <= 0.0 || r <= 1e-12 * self.s[start]);
                 if left_apex {
                     self.tangent[k] = tangent;

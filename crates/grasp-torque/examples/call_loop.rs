@@ -5,7 +5,7 @@
 //! with KIND one of `cold` (the backend alone from a cold start), `check` (the core's
 //! completion and residual check of that answer), `full` (`GraspSolver::solve`),
 //! `lazy` (a cold solve with `Check::Lazy`), `warm` (the backend from the answer for a
-//! wrench 1 % away, alternating), `tick` and `tick-full` (`GraspSolver::resolve` on
+//! wrench 1 % away, alternating: forces up, moments down), `tick` and `tick-full` (`GraspSolver::resolve` on
 //! the same alternating wrenches, with `Check::Lazy` and `Check::Full`) and `build`
 //! (`GraspSolver::new`); the linear view at N = 8 unless `exact`.
 
@@ -38,7 +38,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut answer = Solution::default();
     solve_into(backend.as_mut(), &p.wrench, &cold, &mut answer)?;
     let tol = backend.residual_tolerance();
-    let near: [f64; 6] = std::array::from_fn(|i| p.wrench[i] * 1.01);
+    // The wrench 1 % away as `grasp-torque bench` nudges it (forces up, moments down):
+    // a uniform scale would leave the scaled exact problem unchanged.
+    let near: [f64; 6] = std::array::from_fn(|i| p.wrench[i] * if i < 3 { 1.01 } else { 0.99 });
     let (mut last, mut other) = (answer.clone(), Solution::default());
     let check = if kind == "tick" {
         Check::Lazy

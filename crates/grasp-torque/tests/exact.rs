@@ -252,9 +252,27 @@ fn newton_like_clarabel(p: &GraspProblem, seed: u64) -> Solution {
 /// Seed 900: the apex's dual leaves the dual cone, so the cone goes to its boundary,
 /// first along the tangent plane that dual points to. Both went to the interior-point
 /// method before.
+///
+/// Seeds 1243 and 1693: the cone leaves its apex for its boundary, then its iterate
+/// passes near the apex again. Holding it to the tangent plane there once more made
+/// Newton alternate between plane and boundary without converging; it is held to the
+/// plane only from the apex, and a return is the apex piece again.
 #[test]
 fn cones_that_leave_their_apex_are_solved_by_newton() {
-    for seed in [337, 900] {
+    for seed in [337, 900, 1243, 1693] {
+        newton_like_clarabel(&grasp(seed, 1.0), seed);
+    }
+}
+
+/// Grasps whose optimum has more pieces on their boundary than the reduced problem has
+/// free directions (seeds 1252 and 1545: three cones and two directions, two cones and
+/// one), so that the last piece's constraint depends on the others. It replaces the
+/// one whose multiplier it drives to zero first, as in the dual active-set method;
+/// stacked, the dependent constraints failed Newton's factorisation and the grasps
+/// went to the interior-point method.
+#[test]
+fn a_dependent_piece_replaces_one_of_the_others() {
+    for seed in [1252, 1545, 2139] {
         newton_like_clarabel(&grasp(seed, 1.0), seed);
     }
 }
