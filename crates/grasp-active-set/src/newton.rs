@@ -712,41 +712,69 @@ impl Newton {
         true
     }
 
+    /// A second-order correction of a rejected full step (Nocedal and Wright §15.6): the
+    /// curvature of the boundaries can make the merit refuse Newton's own step near the
+    /// optimum (the Maratos effect). The correction `d2 = −H⁻¹Cᵀ(CH⁻¹Cᵀ)⁻¹ c(y + dx)`
+    /// takes the step back onto the linearised constraints at its end, on the same
+    /// factors; `dx + d2` is taken whole when the merit accepts it. The trial point is in
+    /// `t`; on success `dx` holds the corrected step, and `nu` Newton's multipliers.
+    fn second_order_correction(&mut self, nc: usize, merit0: f64, rho: f64, slope: f64) -> bool {
+        let n = self.n;
+        if nc == 0 {
+            return false;
+        }
+        for r in 0..nc {
+            self.cval[r] = self.constraint(r);
+        }
+        // Newton's step and multipliers aside, in `rhs` (free outside chord re-solves).
+        self.rhs[..n].copy_from_slice(&self.dx);
+        self.rhs[n..n + nc].copy_from_slice(&self.nu[..nc]);
+        self.t[..n].iter_mut().for_each(|v| *v = 0.0);
+        self.solve_kkt(nc);
+        for ((t, y), (d, d2)) in self.t[..n]
+            .iter_mut()
+            .zip(&self.y)
+            .zip(self.rhs[..n].iter().zip(self.dx.iter_mut()))
+        {
+            *d2 += d;
+            *t = y + *d2;
+        }
+        let viol = self.violation(nc);
+        let f: f64 = self.t[..n].iter().map(|v| v * v).sum();
+        let accepted = f + rho * viol <= merit0 + 1e-4 * slope.min(0.0);
+        self.nu[..nc].copy_from_slice(&self.rhs[n..n + nc]);
+        if !accepted {
+            self.dx.copy_from_slice(&self.rhs[..n]);
+        }
+        accepted
+    }
+
     /// `Σ |c_j|` of the first `nc` Newton constraints at the trial point in `t`.
     fn violation(&self, nc: usize) -> f64 {
-        let n = self.n;
-        let y = &self.t[..n];
-        let mut v = 0.0;
-        for r in 0..nc {
-            v += match self.owner[r] {
-                Owner::Row(i) | Owner::Apex(i) => {
-                    (self.b_red[i] - dot4(self.a_red.row(i), y)).abs()
-                }
-                Owner::Cone(k) => {
-                    let (start, dim) = self.socs[k];
-                    let s0 = self.b_red[start] - dot4(self.a_red.row(start), y);
-                    let mut q = 0.0;
-                    for j in 1..dim {
-                        let sj = self.b_red[start + j] - dot4(self.a_red.row(start + j), y);
-                        q += sj * sj;
-                    }
-                    let g = if self.tangent[k] {
-                        // On its tangent plane: the plane's equation.
-                        let u = &self.hint[k * MAX_TAIL..];
-                        (1..dim)
-                            .map(|j| {
-                                u[j - 1]
-                                    * (self.b_red[start + j] - dot4(self.a_red.row(start + j), y))
-                            })
-                            .sum::<f64>()
-                    } else {
-                        q.sqrt()
-                    };
-                    (g - s0).abs()
-                }
-            };
+        (0..nc).map(|r| self.constraint(r).abs()).sum()
+    }
+
+    /// Newton constraint r at the trial point in `t`: a row's `−s_i`, a boundary's
+    /// `‖s1‖ − s0` (on its tangent plane, `uᵀs1 − s0`).
+    fn constraint(&self, r: usize) -> f64 {
+        let y = &self.t[..self.n];
+        let slack = |i: usize| self.b_red[i] - dot4(self.a_red.row(i), y);
+        match self.owner[r] {
+            Owner::Row(i) | Owner::Apex(i) => -slack(i),
+            Owner::Cone(k) => {
+                let (start, dim) = self.socs[k];
+                let g = if self.tangent[k] {
+                    let u = &self.hint[k * MAX_TAIL..];
+                    (1..dim).map(|j| u[j - 1] * slack(start + j)).sum::<f64>()
+                } else {
+                    (1..dim)
+                        .map(|j| slack(start + j).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                };
+                g - slack(start)
+            }
         }
-        v
     }
 
     /// Scaled data: b has size 1, so absolute tolerances are relative ones.
@@ -1184,6 +1212,9 @@ impl Newton {
                 let f: f64 = self.t[..n].iter().map(|v| v * v).sum();
                 let armijo = f + rho * viol <= f0 + rho * viol0 + 1e-4 * alpha * slope.min(0.0);
                 if (alpha == 1.0 && viol <= 0.5 * viol0) || armijo {
+                    break;
+                }
+                if alpha == 1.0 && self.second_order_correction(nc, f0 + rho * viol0, rho, slope) {
                     break;
                 }
                 alpha *= 0.5;

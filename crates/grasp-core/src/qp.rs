@@ -288,32 +288,50 @@ impl TorqueQp {
             let c = &model.contacts[ci];
             let (off, dim) = (model.offsets[ci], c.dim());
             let r = face_rows(ci);
+            let first = rows.len();
             contacts.push(ContactBlock {
                 model: *c,
                 offset: off,
-                first_row: rows.len(),
+                first_row: first,
                 rows: r,
             });
+            // The contact's rows of Z2, Z1 and N, side by side with its face rows.
+            let (z2, z1) = (
+                &model.z2.as_slice()[off * m..(off + dim) * m],
+                &model.z1.as_slice()[off * 6..(off + dim) * 6],
+            );
             for k in 0..r {
-                let i = rows.len();
+                let i = first + k;
+                let face = |t: usize| match repr {
+                    ConeRepr::Inscribed(cone) => cone.faces.as_slice()[k * dim + t],
+                    ConeRepr::Exact => (t == c.normal_index()) as u8 as f64,
+                };
+                let hrow = h.row_mut(i);
                 for t in 0..dim {
-                    let s = match repr {
-                        ConeRepr::Inscribed(cone) => cone.faces[(k, t)],
-                        ConeRepr::Exact => (t == c.normal_index()) as u8 as f64,
-                    };
-                    if s == 0.0 {
-                        continue;
-                    }
-                    for (x, z) in h.row_mut(i).iter_mut().zip(model.z2.row(off + t)) {
-                        *x += s * z;
-                    }
-                    for (x, z) in hw.row_mut(i).iter_mut().zip(model.z1.row(off + t)) {
-                        *x += s * z;
-                    }
-                    if d > 0 {
-                        let nrow = model.passive_basis.row(off + t);
-                        for (x, z) in hp.row_mut(i).iter_mut().zip(nrow) {
+                    let s = face(t);
+                    if s != 0.0 {
+                        for (x, z) in hrow.iter_mut().zip(&z2[t * m..(t + 1) * m]) {
                             *x += s * z;
+                        }
+                    }
+                }
+                let wrow = hw.row_mut(i);
+                for t in 0..dim {
+                    let s = face(t);
+                    if s != 0.0 {
+                        for (x, z) in wrow.iter_mut().zip(&z1[t * 6..(t + 1) * 6]) {
+                            *x += s * z;
+                        }
+                    }
+                }
+                if d > 0 {
+                    for t in 0..dim {
+                        let s = face(t);
+                        if s != 0.0 {
+                            let nrow = model.passive_basis.row(off + t);
+                            for (x, z) in hp.row_mut(i).iter_mut().zip(nrow) {
+                                *x += s * z;
+                            }
                         }
                     }
                 }
