@@ -64,8 +64,10 @@ fn solves_reuse_the_workspace(cones: Cones) {
         (name.to_string(), load_problem(path).unwrap())
     });
     // With exact cones, grasps whose optimum holds a cone at its apex too (Newton's
-    // apex rows and their basis use the solver's buffers).
-    let apex = [(10543, 0.25), (337, 1.0)].map(|(seed, friction)| {
+    // apex rows and their basis use the solver's buffers), one whose guess swaps a
+    // dependent piece (1252) and one whose full steps need the second-order correction
+    // (10045).
+    let apex = [(10543, 0.25), (337, 1.0), (1252, 1.0), (10045, 0.25)].map(|(seed, friction)| {
         (
             format!("seed {seed}"),
             grasp_testkit::sweep_grasp(seed, friction),
