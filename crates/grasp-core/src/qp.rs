@@ -295,7 +295,7 @@ impl TorqueQp {
                 first_row: first,
                 rows: r,
             });
-            // The contact's rows of Z2, Z1 and N, side by side with its face rows.
+            // The contact's rows of Z2 and Z1, which its face rows combine.
             let (z2, z1) = (
                 &model.z2.as_slice()[off * m..(off + dim) * m],
                 &model.z1.as_slice()[off * 6..(off + dim) * 6],

@@ -5,9 +5,10 @@
 //! with KIND one of `cold` (the backend alone from a cold start), `check` (the core's
 //! completion and residual check of that answer), `full` (`GraspSolver::solve`),
 //! `lazy` (a cold solve with `Check::Lazy`), `warm` (the backend from the answer for a
-//! wrench 1 % away, alternating: forces up, moments down), `tick` and `tick-full` (`GraspSolver::resolve` on
-//! the same alternating wrenches, with `Check::Lazy` and `Check::Full`) and `build`
-//! (`GraspSolver::new`); the linear view at N = 8 unless `exact`.
+//! wrench 1 % away, alternating: forces up, moments down), `tick` and `tick-full`
+//! (`GraspSolver::resolve` on the same alternating wrenches, with `Check::Lazy` and
+//! `Check::Full`) and `build` (`GraspSolver::new`); the linear view at N = 8 unless
+//! `exact`.
 
 use grasp_torque::{
     solve_into, solve_into_with, Check, Cones, GraspSolver, Solution, SolverConfig, WarmStart,
