@@ -6,10 +6,12 @@
 //!    method. Their key constraint set says, per contact, whether the force is inside
 //!    its cone or on its boundary: that guess starts the active-set Newton method of
 //!    [`crate::newton`] from the inscribed optimum, which converges in a few steps;
-//! 2. if the inscribed problem is infeasible, solves it with circumscribed polyhedra
-//!    (which contain the cones): infeasible there is a certificate that the exact
+//! 2. if the inscribed problem is infeasible, or Newton fails from its optimum, solves
+//!    the problem with circumscribed polyhedra (which contain the cones). Infeasible
+//!    there (after an infeasible inscribed problem) is a certificate that the exact
 //!    problem is infeasible; otherwise their optimum, just outside the cones, starts
-//!    Newton the same way;
+//!    Newton the same way, from the other side of each cone's boundary (where a cone
+//!    near its apex sent Newton from the inscribed optimum between apex and boundary);
 //! 3. checks the Newton answer from scratch ([`ConicForm::certificate`]: primal and
 //!    dual cone feasibility, stationarity, complementarity and the duality gap). Only an
 //!    answer that passes is `optimal` (`method: "newton"`);
@@ -371,16 +373,29 @@ impl TorqueSolver for ExactSolver {
         self.inner
             .solve_raw(w, &WarmStart::default(), &mut self.lin);
         out.iterations += self.lin.iterations;
-        let feasible = self.lin.status == Status::Optimal;
-        if feasible && self.newton_from_polyhedra(w, alpha, out) {
-            return;
-        }
-        if self.lin.status == Status::Infeasible {
-            // 2. The circumscribed polyhedra.
-            if let Some(reason) = self.outer_infeasible(w, PROOF_SIDES) {
-                return Self::infeasible(out, reason);
+        let retry = match self.lin.status {
+            Status::Optimal => {
+                if self.newton_from_polyhedra(w, alpha, out) {
+                    return;
+                }
+                // (Inscribed polyhedra that hold the grasp prove nothing about the
+                // circumscribed ones' status: only their optimum is wanted.)
+                self.outer
+                    .solve_raw(w, &WarmStart::default(), &mut self.lin);
+                true
             }
-            // Their optimum, just outside the cones, is a guess too.
+            // 2. The circumscribed polyhedra.
+            Status::Infeasible => {
+                if let Some(reason) = self.outer_infeasible(w, PROOF_SIDES) {
+                    return Self::infeasible(out, reason);
+                }
+                true
+            }
+            _ => false,
+        };
+        // Their optimum, just outside the cones, is a second guess: from the other side
+        // of each boundary, Newton takes another path to it (a cone near its apex, say).
+        if retry {
             out.iterations += self.lin.iterations;
             if self.lin.status == Status::Optimal && self.newton_from_polyhedra(w, alpha, out) {
                 return;

@@ -23,8 +23,9 @@
 //! differentiable, is the piece `s_k = 0`: linear rows whose multipliers are the conic
 //! dual, which must lie in the dual cone. The apex is read off the iterate (the
 //! inscribed optimum's key set holds only independent faces, so it cannot say), or
-//! reached when a boundary's tail vanishes. A guess that does not converge is left to
-//! the interior-point method.
+//! reached when a boundary's tail vanishes. A guess that does not converge, or that
+//! sends the same cone to its apex twice (it cycles), is left to the caller's other
+//! start or the interior-point method.
 //!
 //! Once Newton's steps shrink quadratically, the last ones are chord steps on the
 //! current factors (Shamanskii's variant): the factors would barely change.
@@ -117,6 +118,9 @@ pub(crate) struct Newton {
     /// Per cone, whether the current Newton step holds it to that tangent plane (its
     /// step is then no Newton step of the cone: no chord steps follow).
     tangent: Vec<bool>,
+    /// The guesses of this solve whose Newton run took a cone to its apex, by
+    /// [`Self::guess_key`]: the same guess taking it there again cycles.
+    to_apex: Vec<u64>,
     /// Multipliers per row and per cone.
     pub(crate) nu_row: Vec<f64>,
     pub(crate) nu_cone: Vec<f64>,
@@ -256,6 +260,7 @@ impl Newton {
             left_apex: vec![false; socs.len()],
             hint: vec![0.0; socs.len() * MAX_TAIL],
             tangent: vec![false; socs.len()],
+            to_apex: Vec::with_capacity(MAX_CHANGES),
             nu_row: vec![0.0; rows],
             nu_cone: vec![0.0; socs.len()],
             socs,
@@ -360,6 +365,7 @@ impl Newton {
                 }
             }
         }
+        self.to_apex.clear();
         for change in 0..MAX_CHANGES {
             let end = match (hot && change == 0, self.frozen) {
                 (true, Some(nc)) => match self.chord(nc, true, f64::INFINITY) {
@@ -371,6 +377,16 @@ impl Newton {
             match end {
                 Step::Failed => return false,
                 Step::AtApex(k) => {
+                    // The same guess sending the same cone to its apex again: the guess
+                    // alternates between apex and boundary (a force on its boundary
+                    // near the apex), and would until its changes run out. The
+                    // caller's other start, or the interior-point method, takes over.
+                    // (Newton's method leaves the guess as it was.)
+                    let key = self.guess_key() ^ (k as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+                    if self.to_apex.contains(&key) {
+                        return false;
+                    }
+                    self.to_apex.push(key);
                     self.set_apex(k);
                     self.frozen = None;
                     continue;
@@ -473,6 +489,21 @@ impl Newton {
             return true;
         }
         false
+    }
+
+    /// The guess as a number: the active rows, each cone's piece and whether it left
+    /// its apex (which changes how Newton treats it), hashed (FNV-1a). Two guesses
+    /// that collide only end a solve early.
+    fn guess_key(&self) -> u64 {
+        let mut h = 0xcbf2_9ce4_8422_2325u64;
+        let mut mix = |v: u64| h = (h ^ v).wrapping_mul(0x0100_0000_01b3);
+        for i in self.orth.0..self.orth.1 {
+            mix(self.active[i] as u64);
+        }
+        for (p, l) in self.piece.iter().zip(&self.left_apex) {
+            mix(*p as u64 + 3 * *l as u64);
+        }
+        h
     }
 
     /// When the constraint of piece `new` (violated at the converged point) depends on

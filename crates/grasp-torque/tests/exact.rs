@@ -289,6 +289,24 @@ fn a_corrected_full_step_is_taken_where_the_merit_refuses_newtons() {
     }
 }
 
+/// Grasps Newton cannot solve from the inscribed optimum (the guess cycles: a cone
+/// near its apex, taken to the apex and back) but solves from the circumscribed
+/// optimum, which lies just outside the cones. All six went to the interior-point
+/// method before, at 200–600 µs a solve.
+#[test]
+fn newton_starts_again_from_the_circumscribed_optimum() {
+    for (seed, friction) in [
+        (1243, 1.0),
+        (2282, 1.0),
+        (5616, 1.0),
+        (10590, 0.25),
+        (13316, 0.25),
+        (14047, 0.25),
+    ] {
+        newton_like_clarabel(&grasp(seed, friction), seed);
+    }
+}
+
 /// The inscribed linearisations bracket σ* from above and close in on it as N grows;
 /// the native optimum is in its exact cones.
 #[test]

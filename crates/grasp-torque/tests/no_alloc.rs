@@ -65,9 +65,16 @@ fn solves_reuse_the_workspace(cones: Cones) {
     });
     // With exact cones, grasps whose optimum holds a cone at its apex too (Newton's
     // apex rows and their basis use the solver's buffers), one whose guess swaps a
-    // dependent piece (1252) and one whose full steps need the second-order correction
-    // (10045).
-    let apex = [(10543, 0.25), (337, 1.0), (1252, 1.0), (10045, 0.25)].map(|(seed, friction)| {
+    // dependent piece (1252), one whose full steps need the second-order correction
+    // (10045) and one that Newton solves from the circumscribed optimum (10590).
+    let apex = [
+        (10543, 0.25),
+        (337, 1.0),
+        (1252, 1.0),
+        (10045, 0.25),
+        (10590, 0.25),
+    ]
+    .map(|(seed, friction)| {
         (
             format!("seed {seed}"),
             grasp_testkit::sweep_grasp(seed, friction),
