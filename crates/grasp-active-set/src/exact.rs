@@ -74,6 +74,26 @@ pub struct ExactSolver {
     certificate: Certificate,
 }
 
+/// The interior-point method's multipliers as a ray of the dual, when they prove the
+/// grasp infeasible: on a grasp the exact cones cannot hold, although the
+/// circumscribed polyhedra can, the method's dual iterates grow along such a ray until
+/// it stalls. `xp` meets the equalities ([`ConicForm::dual_ray`]).
+fn ray_of(
+    ipm: &Ipm,
+    conic: &ConicForm,
+    b: &[f64],
+    xp: &[f64],
+    dual: &mut [f64],
+    scratch: &mut Vec<f64>,
+) -> Option<Reason> {
+    ipm.dual_into(conic, dual);
+    let ray = conic.dual_ray(b, xp, dual, CERTIFICATE_TOLERANCE, scratch);
+    ray.passed.then_some(Reason::DualRay {
+        value: ray.value,
+        stationarity: ray.stationarity,
+    })
+}
+
 /// `qp` with every exact cone replaced by a polyhedron from `cone`.
 fn polyhedral(
     qp: &TorqueQp,
@@ -305,23 +325,17 @@ impl ExactSolver {
     }
 
     /// The interior-point method's last multipliers as a ray of the dual, when they
-    /// prove the grasp infeasible: on a grasp the exact cones cannot hold, although
-    /// the circumscribed polyhedra can, the method's dual iterates grow along such a
-    /// ray until it stalls.
+    /// prove the grasp infeasible ([`ray_of`]).
     fn dual_ray(&mut self, w: &[f64; 6], alpha: f64) -> Option<Reason> {
-        self.ipm.dual_into(&self.conic, &mut self.dual);
         let xp = self.newton.particular(w, alpha)?;
-        let ray = self.conic.dual_ray(
+        ray_of(
+            &self.ipm,
+            &self.conic,
             &self.b,
             xp,
-            &self.dual,
-            CERTIFICATE_TOLERANCE,
+            &mut self.dual,
             &mut self.scratch,
-        );
-        ray.passed.then_some(Reason::DualRay {
-            value: ray.value,
-            stationarity: ray.stationarity,
-        })
+        )
     }
 
     fn infeasible(out: &mut Solution, reason: Reason) {
@@ -403,9 +417,26 @@ impl TorqueSolver for ExactSolver {
         }
         // 4. The interior-point fallback.
         self.hot = None;
-        let end = self.ipm.solve(&self.conic, &self.b);
+        // Each iterate's multipliers are checked for a ray of the dual: it proves the
+        // grasp infeasible as soon as they show one, several iterations before the
+        // method, growing them along it, stalls.
+        let mut ray = None;
+        let end = {
+            let (conic, b, dual, scratch) =
+                (&self.conic, &self.b, &mut self.dual, &mut self.scratch);
+            let xp = self.newton.particular(w, alpha);
+            self.ipm.solve(conic, b, &mut |ipm| {
+                if let Some(xp) = xp {
+                    ray = ray_of(ipm, conic, b, xp, dual, scratch);
+                }
+                ray.is_some()
+            })
+        };
         out.iterations += self.ipm.iterations;
         out.method = Some("interior_point");
+        if let Some(reason) = ray {
+            return Self::infeasible(out, reason);
+        }
         if end == IpmEnd::Converged {
             self.ipm.dual_into(&self.conic, &mut self.dual);
             self.certificate = self.conic.certificate(
@@ -445,7 +476,9 @@ impl TorqueSolver for ExactSolver {
                     c.primal, c.dual, c.stationarity, c.gap
                 ),
                 IpmEnd::IterationLimit => "the exact-cone interior-point method reached its iteration cap".into(),
-                IpmEnd::Stalled => "the exact-cone interior-point method stalled".into(),
+                IpmEnd::Stalled | IpmEnd::Stopped => {
+                    "the exact-cone interior-point method stalled".into()
+                }
             } + &format!(" (the circumscribed polyhedra at N = {FINE_SIDES} admit a torque)"),
         });
     }
@@ -521,7 +554,7 @@ mod tests {
             let model = Arc::new(GraspModel::new(&p, &ModelOptions::default()).unwrap());
             let mut s = ExactSolver::new(TorqueQp::exact(model), Default::default()).unwrap();
             let alpha = s.conic.b_into(&p.wrench, &mut s.b);
-            if alpha == 0.0 || s.ipm.solve(&s.conic, &s.b) != IpmEnd::Converged {
+            if alpha == 0.0 || s.ipm.solve(&s.conic, &s.b, &mut |_| false) != IpmEnd::Converged {
                 continue;
             }
             s.ipm.dual_into(&s.conic, &mut s.dual);

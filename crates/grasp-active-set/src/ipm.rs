@@ -32,6 +32,8 @@ pub(crate) enum IpmEnd {
     IterationLimit,
     /// The step length vanished or the factorisation broke down.
     Stalled,
+    /// The caller's test stopped it (its multipliers proved the problem infeasible).
+    Stopped,
 }
 
 /// One cone of the inequality rows.
@@ -276,7 +278,14 @@ impl Ipm {
     }
 
     /// Solves the scaled problem with right-hand side `b` (the form's row order).
-    pub(crate) fn solve(&mut self, form: &ConicForm, b: &[f64]) -> IpmEnd {
+    /// `stop` sees each iterate that has not converged; true ends the run there
+    /// (`IpmEnd::Stopped`).
+    pub(crate) fn solve(
+        &mut self,
+        form: &ConicForm,
+        b: &[f64],
+        stop: &mut dyn FnMut(&Self) -> bool,
+    ) -> IpmEnd {
         self.load(form, b);
         self.iterations = 0;
         if !self.initial_point() {
@@ -285,8 +294,8 @@ impl Ipm {
         let st = self.settings;
         let bscale = norm_inf(&self.ws.be).max(norm_inf(&self.ws.h)).max(1.0);
         let mut best = f64::INFINITY;
-        let end = self.iterate(bscale, &mut best);
-        if end != IpmEnd::Converged && best <= st.acceptable {
+        let end = self.iterate(bscale, &mut best, stop);
+        if matches!(end, IpmEnd::IterationLimit | IpmEnd::Stalled) && best <= st.acceptable {
             // Rounding stopped the last digits: the best iterate is the answer.
             self.x.copy_from_slice(&self.ws.best_x);
             self.y.copy_from_slice(&self.ws.best_y);
@@ -298,7 +307,12 @@ impl Ipm {
     }
 
     /// The iteration proper; `best` tracks the best merit seen, whose iterate is kept.
-    fn iterate(&mut self, bscale: f64, best: &mut f64) -> IpmEnd {
+    fn iterate(
+        &mut self,
+        bscale: f64,
+        best: &mut f64,
+        stop: &mut dyn FnMut(&Self) -> bool,
+    ) -> IpmEnd {
         let st = self.settings;
         for it in 0..st.max_iterations {
             self.iterations = it + 1;
@@ -335,6 +349,9 @@ impl Ipm {
                 self.ws.best_y.copy_from_slice(&self.y);
                 self.ws.best_z.copy_from_slice(&self.z);
                 self.ws.best_s.copy_from_slice(&self.s);
+            }
+            if stop(self) {
+                return IpmEnd::Stopped;
             }
             let mu = gap / self.degree.max(1.0);
             if !self.scaling() || !self.factor() {

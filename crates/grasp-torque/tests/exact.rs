@@ -192,6 +192,22 @@ fn grasps_at_the_edge_of_feasibility_are_proved_infeasible_by_a_dual_ray() {
     }
 }
 
+/// The interior-point method's multipliers are checked for a ray of the dual at every
+/// iterate, so a ray ends the run as soon as it shows. On seed 1317 at normal
+/// friction it shows at the method's 17th iteration; the method itself ran on to its
+/// cap of 80 iterations, where the ray was checked before.
+#[test]
+fn a_dual_ray_ends_the_interior_point_method_as_soon_as_it_shows() {
+    let native = run(&grasp(1317, 1.0), Backend::ActiveSet, Cones::Exact);
+    assert!(
+        matches!(native.reason, Some(Reason::DualRay { .. })),
+        "{:?}",
+        native.reason
+    );
+    // (The count includes the polyhedral solves' and Newton's iterations.)
+    assert!(native.iterations < 80, "{} iterations", native.iterations);
+}
+
 /// Grasps at a quarter of the friction whose optimum holds a cone at its apex: an
 /// unloaded contact, or an SFCl contact on the edge `f_t = 0` of its cone. Found by a
 /// sweep twenty times wider than the one above (seeds 0..6000 at normal friction,
