@@ -63,6 +63,11 @@ pub struct ExactSolver {
     newton: Newton,
     /// Whether `newton` holds the last answer (for a warm solve), at magnitude α.
     hot: Option<f64>,
+    /// Whether that answer is the interior-point method's ([`Newton::adopt`]), and
+    /// whether the method's answers are taken up: not after a warm solve from one has
+    /// failed, until Newton solves a grasp again.
+    adopted: bool,
+    adopt: bool,
     /// The view with every exact cone circumscribed.
     outer: ActiveSetSolver,
     settings: ActiveSetSettings,
@@ -189,6 +194,8 @@ impl ExactSolver {
             soc_group,
             newton,
             hot: None,
+            adopted: false,
+            adopt: true,
             outer,
             settings,
             lin: Solution::default(),
@@ -317,6 +324,7 @@ impl ExactSolver {
                     &mut out.internal_forces,
                 );
                 self.hot = Some(alpha);
+                (self.adopted, self.adopt) = (false, true);
                 return true;
             }
         }
@@ -382,6 +390,7 @@ impl TorqueSolver for ExactSolver {
             if self.try_newton(w, alpha, true, out) {
                 return;
             }
+            self.adopt &= !self.adopted;
         }
         // 1. The inscribed polyhedra: a guess for Newton, or a reason to look further.
         self.inner
@@ -454,6 +463,16 @@ impl TorqueSolver for ExactSolver {
                     &mut out.torque,
                     &mut out.internal_forces,
                 );
+                // A warm solve starts Newton from this answer: near it, Newton often
+                // converges where it did not from the polyhedra.
+                if self.adopt
+                    && self
+                        .newton
+                        .adopt(&self.conic, &self.ipm.x, &self.dual, w, alpha)
+                {
+                    self.hot = Some(alpha);
+                    self.adopted = true;
+                }
                 return;
             }
         }

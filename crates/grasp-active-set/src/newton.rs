@@ -51,6 +51,9 @@ const CHORD_ERROR: f64 = 1e-11;
 /// A cone whose slack is this small against the iterate (the scaled problem's answer
 /// has size about 1) is at its apex.
 const APEX: f64 = 1e-9;
+/// A multiplier of a certified answer this small against the largest is an inactive
+/// piece's (see [`Newton::adopt`]).
+const ADOPT: f64 = 1e-6;
 /// A boundary piece this close to its apex during Newton's method is put at the apex.
 const NEAR_APEX: f64 = 1e-6;
 /// A row of a cone at its apex whose part independent of the constraints before it is
@@ -321,6 +324,74 @@ impl Newton {
         for part in [&mut self.x[..], &mut self.y, nu_row, &mut self.nu_cone] {
             part.iter_mut().for_each(|v| *v *= f);
         }
+    }
+
+    /// Takes a certified primal-dual pair `(x, z)` of the form at wrench `w` (magnitude
+    /// α) as the last answer, so that a warm solve starts Newton from it, with the
+    /// guess complementarity gives: a row or cone with a multiplier is active, and a
+    /// cone on its boundary has the multiplier of its dual's head (`z = ν (1, −u)`),
+    /// unless its slack vanishes: then it is at its apex, its rows' multipliers the
+    /// dual. False, and nothing to start from, when the equalities were not eliminated.
+    pub(crate) fn adopt(
+        &mut self,
+        form: &ConicForm,
+        x: &[f64],
+        z: &[f64],
+        w: &[f64; 6],
+        alpha: f64,
+    ) -> bool {
+        if self.null_basis.nrows() != form.nx || form.free > 0 {
+            return false;
+        }
+        self.x.copy_from_slice(&x[..form.nx]);
+        self.y.iter_mut().for_each(|v| *v = 0.0);
+        add_columns(&mut self.y, self.null_basis.as_slice(), &self.x, 1.0);
+        let wt = self.set_particular(w, alpha);
+        let b_red = &mut self.b_red[self.eq..];
+        b_red.iter_mut().for_each(|v| *v = 0.0);
+        add_columns(b_red, &self.b_red_cols, &wt, 1.0);
+        self.slacks();
+        self.reset_multipliers();
+        // The interior-point method leaves an inactive piece's multiplier at μ over its
+        // slack: far below an active one's.
+        let tol = ADOPT * norm_inf(&z[self.eq..]);
+        let apex = APEX * norm_inf(&self.y).max(1.0);
+        for i in self.orth.0..self.orth.1 {
+            self.active[i] = z[i] > tol;
+            self.nu_row[i] = if self.active[i] { z[i] } else { 0.0 };
+        }
+        for k in 0..self.socs.len() {
+            let (start, dim) = self.socs[k];
+            if z[start] <= tol {
+                self.piece[k] = Piece::Inside;
+            } else if self.s[start..start + dim].iter().all(|v| v.abs() <= apex) {
+                self.set_apex(k);
+            } else {
+                self.piece[k] = Piece::Boundary;
+                self.nu_cone[k] = z[start];
+            }
+        }
+        // (After every piece is known: an SFCl pair at the apex together keeps its
+        // shared tail's multiplier, both tails', in the first cone's rows.)
+        for k in 0..self.socs.len() {
+            if self.piece[k] != Piece::Apex {
+                continue;
+            }
+            let (start, dim) = self.socs[k];
+            self.nu_row[start] = z[start];
+            match self.pair[k] {
+                Some(j) if self.piece[j] == Piece::Apex => {
+                    let first = start.min(self.socs[j].0);
+                    for t in 1..dim {
+                        self.nu_row[first + t] += z[start + t];
+                    }
+                }
+                _ => {
+                    self.nu_row[start + 1..start + dim].copy_from_slice(&z[start + 1..start + dim])
+                }
+            }
+        }
+        true
     }
 
     /// Clears multipliers before a new guess.

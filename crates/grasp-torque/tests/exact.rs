@@ -386,6 +386,39 @@ fn resolve_in_a_control_loop_matches_cold_solves() {
     }
 }
 
+/// Grasps that only the interior-point method solves cold (Newton cycles from both
+/// polyhedral starts: a force on its boundary near the apex). A control loop starts
+/// Newton from the last answer, the interior-point method's the first time, and Newton
+/// converges from there: every warm re-solve is by Newton and gives the cold answer.
+/// Before, every re-solve went the cold way, 250–700 µs each (docs/benchmarks.md).
+#[test]
+fn a_control_loop_starts_newton_from_the_interior_point_answer() {
+    for (seed, friction) in [(1782, 1.0), (10028, 0.25), (13404, 0.25)] {
+        let p = grasp(seed, friction);
+        let mut ctl = GraspSolver::new(&p, &exact_config()).unwrap();
+        let mut cold = GraspSolver::new(&p, &exact_config()).unwrap();
+        let first = ctl.resolve(&p.wrench).unwrap();
+        assert_eq!(first.method, Some("interior_point"), "seed {seed}");
+        let mut w = p.wrench;
+        for k in 0..30 {
+            w[k % 6] *= 1.0 + 0.01 * ((k as f64) * 0.7).sin();
+            let warm = ctl.resolve(&w).unwrap().clone();
+            let fresh = cold.solve(&w, &WarmStart::default()).unwrap();
+            assert!(
+                warm.is_optimal() && fresh.is_optimal(),
+                "seed {seed} step {k}"
+            );
+            assert_eq!(warm.method, Some("newton"), "seed {seed} step {k}");
+            assert!(
+                rel(warm.objective, fresh.objective) < 1e-9,
+                "seed {seed} step {k}: {} vs {}",
+                warm.objective,
+                fresh.objective
+            );
+        }
+    }
+}
+
 /// A control loop of warm re-solves (the hot path: chord iterations on the kept Newton
 /// factors) gives the cold answers, on every bundled fixture, without Clarabel.
 #[test]
