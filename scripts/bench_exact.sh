@@ -4,7 +4,8 @@
 # bench` (model built once), interleaved: each round runs every fixture and solver
 # once, so a fixture's rounds spread over the whole run; each figure is the lowest of
 # its rounds' medians (the shared machine's load only ever adds time, and it changes
-# over seconds to minutes).
+# over seconds to minutes; and some fixtures' timings are bimodal from one process to
+# the next, so that five rounds can miss the fast mode: docs/benchmarks.md, run J).
 # Cold: `cold_raw_us`, the backend alone. Warm: `warm_1pct_us`, a full `resolve` (with
 # the core's checks) after a 1 % wrench change.
 # Usage: bash scripts/bench_exact.sh [REPEATS] [ROUNDS]   (after `cargo build --release`)
@@ -12,7 +13,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=target/release/grasp-torque
 repeats=${1:-1000}
-rounds=${2:-3}
+rounds=${2:-12}
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
 for _ in $(seq "$rounds"); do
