@@ -70,6 +70,9 @@ pub struct ExactSolver {
     adopt: bool,
     /// The view with every exact cone circumscribed.
     outer: ActiveSetSolver,
+    /// The same at [`FINE_SIDES`], built the first time a grasp needs it (at the edge
+    /// of feasibility), then kept for the grasp's next solves.
+    fine: Option<ActiveSetSolver>,
     settings: ActiveSetSettings,
     lin: Solution,
     b: Vec<f64>,
@@ -197,6 +200,7 @@ impl ExactSolver {
             adopted: false,
             adopt: true,
             outer,
+            fine: None,
             settings,
             lin: Solution::default(),
             b: vec![0.0; rows],
@@ -220,14 +224,15 @@ impl ExactSolver {
         if sides == PROOF_SIDES {
             self.outer.solve_raw(w, &cold, &mut self.lin);
         } else {
-            // Only for grasps at the edge of feasibility: built when needed.
-            let lin = Linearization {
-                sides,
-                ..self.qp.constraints.linearization.unwrap_or_default()
-            };
-            let fine = polyhedral(&self.qp, &lin, circumscribed_cone);
-            let mut s = ActiveSetSolver::new(fine, self.settings).ok()?;
-            s.solve_raw(w, &cold, &mut self.lin);
+            if self.fine.is_none() {
+                let lin = Linearization {
+                    sides,
+                    ..self.qp.constraints.linearization.unwrap_or_default()
+                };
+                let fine = polyhedral(&self.qp, &lin, circumscribed_cone);
+                self.fine = Some(ActiveSetSolver::new(fine, self.settings).ok()?);
+            }
+            self.fine.as_mut()?.solve_raw(w, &cold, &mut self.lin);
         }
         (self.lin.status == Status::Infeasible).then(|| Reason::OuterApproximation {
             sides,

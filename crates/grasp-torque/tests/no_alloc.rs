@@ -169,3 +169,38 @@ fn batch_wrenches_after_the_first_reuse_the_workers_buffers() {
         }
     }
 }
+
+/// A grasp at the edge of feasibility, which only the circumscribed polyhedra at
+/// N = 256 decide (seed 11047 at a quarter of the friction): they are built at its
+/// first solve and kept, so later solves allocate only the infeasible answers' reasons
+/// (boxed causes, lists of blocking rows, messages: 10 allocations), not a polyhedral
+/// solver of a thousand rows again (109 more, as every solve did before).
+#[test]
+fn the_fine_polyhedra_are_built_once() {
+    let p = grasp_testkit::sweep_grasp(11047, 0.25);
+    let config = SolverConfig {
+        cones: Cones::Exact,
+        ..Default::default()
+    };
+    let mut s = GraspSolver::new(&p, &config).unwrap();
+    let before = allocations();
+    let first = s.solve(&p.wrench, &WarmStart::default()).unwrap();
+    assert!(matches!(
+        first.reason,
+        Some(grasp_torque::Reason::OuterApproximation { sides: 256, .. })
+    ));
+    let building = allocations() - before;
+    let before = allocations();
+    for _ in 0..5 {
+        let again = s.solve(&p.wrench, &WarmStart::default()).unwrap();
+        assert!(matches!(
+            again.reason,
+            Some(grasp_torque::Reason::OuterApproximation { sides: 256, .. })
+        ));
+    }
+    let per_solve = (allocations() - before) / 5;
+    assert!(
+        10 * per_solve <= building,
+        "{per_solve} allocations per solve, {building} the first"
+    );
+}
