@@ -316,6 +316,14 @@ impl Newton {
         wt
     }
 
+    /// `x_p = E⁺ b_E` and `b_red = b − (A E⁺) b_E` from the wrench, at magnitude α.
+    fn set_wrench(&mut self, w: &[f64; 6], alpha: f64) {
+        let wt = self.set_particular(w, alpha);
+        let b_red = &mut self.b_red[self.eq..];
+        b_red.iter_mut().for_each(|v| *v = 0.0);
+        add_columns(b_red, &self.b_red_cols, &wt, 1.0);
+    }
+
     /// Scales the iterate and multipliers by `f` (the scaled problem's answer moves
     /// with 1/α when the right-hand side's magnitude α changes).
     pub(crate) fn rescale(&mut self, f: f64) {
@@ -346,10 +354,7 @@ impl Newton {
         self.x.copy_from_slice(&x[..form.nx]);
         self.y.iter_mut().for_each(|v| *v = 0.0);
         add_columns(&mut self.y, self.null_basis.as_slice(), &self.x, 1.0);
-        let wt = self.set_particular(w, alpha);
-        let b_red = &mut self.b_red[self.eq..];
-        b_red.iter_mut().for_each(|v| *v = 0.0);
-        add_columns(b_red, &self.b_red_cols, &wt, 1.0);
+        self.set_wrench(w, alpha);
         self.slacks();
         self.reset_multipliers();
         // The interior-point method leaves an inactive piece's multiplier at μ over its
@@ -414,11 +419,7 @@ impl Newton {
             // carry no curvature): the interior-point method's case.
             return false;
         }
-        // x_p = E⁺ b_E and b_red = b − (A E⁺) b_E from the wrench, at magnitude α.
-        let wt = self.set_particular(w, alpha);
-        let b_red = &mut self.b_red[self.eq..];
-        b_red.iter_mut().for_each(|v| *v = 0.0);
-        add_columns(b_red, &self.b_red_cols, &wt, 1.0);
+        self.set_wrench(w, alpha);
         // y = Nᵀ x, unless hot: then y is the last answer's, rescaled with x.
         self.slacks_at_y = false;
         self.left_apex.iter_mut().for_each(|v| *v = false);
