@@ -308,7 +308,7 @@ fn a_corrected_full_step_is_taken_where_the_merit_refuses_newtons() {
 /// Grasps Newton cannot solve from the inscribed optimum (the guess cycles: a cone
 /// near its apex, taken to the apex and back) but solves from the circumscribed
 /// optimum, which lies just outside the cones. All six went to the interior-point
-/// method before, at 200–600 µs a solve.
+/// method before, at 120–360 µs a solve.
 #[test]
 fn newton_starts_again_from_the_circumscribed_optimum() {
     for (seed, friction) in [
@@ -390,7 +390,8 @@ fn resolve_in_a_control_loop_matches_cold_solves() {
 /// polyhedral starts: a force on its boundary near the apex). A control loop starts
 /// Newton from the last answer, the interior-point method's the first time, and Newton
 /// converges from there: every warm re-solve is by Newton and gives the cold answer.
-/// Before, every re-solve went the cold way, 250–700 µs each (docs/benchmarks.md).
+/// Before, every re-solve went the cold way, at the method's cost (docs/benchmarks.md,
+/// "Warm starts from the interior-point answer").
 #[test]
 fn a_control_loop_starts_newton_from_the_interior_point_answer() {
     for (seed, friction) in [(1782, 1.0), (10028, 0.25), (13404, 0.25)] {
