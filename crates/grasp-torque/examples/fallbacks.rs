@@ -1,0 +1,86 @@
+//! The exact-cone solver's hard grasps, from the robustness sweep of
+//! `tests/exact.rs` (`grasp_testkit::sweep_grasp`): which grasps reach the
+//! interior-point fallback, and what they cost cold and in a control loop.
+//!
+//! Run: `cargo run --release -p grasp-torque --example fallbacks -- list` lists the
+//! grasps of the 12 000-grasp sweep (seeds 0..6000 at normal friction, 10000..16000 at
+//! a quarter of it) whose cold exact solve ends by the interior-point method, with
+//! their status. `… -- time SEED:FRICTION...` times each grasp: a cold solve of the
+//! backend alone (200 solves, best of five) and a control loop of `resolve` on a
+//! wrench alternating by 1 % as `grasp-torque bench` does it (100 ticks, best of
+//! three), with the methods the loop's answers came by.
+
+use grasp_testkit::sweep_grasp;
+use grasp_torque::{solve_into, Cones, GraspSolver, Solution, SolverConfig, WarmStart};
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let config = SolverConfig {
+        cones: Cones::Exact,
+        ..Default::default()
+    };
+    match args.first().map(String::as_str) {
+        Some("list") => {
+            for (friction, seeds) in [(1.0, 0..6000u64), (0.25, 10000..16000u64)] {
+                for seed in seeds {
+                    let p = sweep_grasp(seed, friction);
+                    let mut s = config.build(config.qp(&p)?)?;
+                    let mut out = Solution::default();
+                    solve_into(s.as_mut(), &p.wrench, &WarmStart::default(), &mut out)?;
+                    if out.method == Some("interior_point") {
+                        println!("{seed}:{friction} {}", out.status);
+                    }
+                }
+            }
+        }
+        Some("time") => {
+            for arg in &args[1..] {
+                let (seed, friction) = arg
+                    .split_once(':')
+                    .ok_or_else(|| format!("{arg}: expected SEED:FRICTION"))?;
+                let p = sweep_grasp(seed.parse()?, friction.parse()?);
+                let mut s = config.build(config.qp(&p)?)?;
+                let mut out = Solution::default();
+                let cold = best_of(5, 200, || {
+                    solve_into(s.as_mut(), &p.wrench, &WarmStart::default(), &mut out).map(|_| ())
+                })?;
+                let (w0, w1) = (
+                    p.wrench,
+                    std::array::from_fn(|i| p.wrench[i] * if i < 3 { 1.01 } else { 0.99 }),
+                );
+                let mut ctl = GraspSolver::new(&p, &config)?;
+                ctl.resolve(&w0)?;
+                let mut methods = BTreeMap::new();
+                let mut tick = 0usize;
+                let warm = best_of(3, 100, || {
+                    tick += 1;
+                    let r = ctl.resolve(if tick % 2 == 1 { &w1 } else { &w0 })?;
+                    *methods.entry(r.method.unwrap_or("none")).or_insert(0) += 1;
+                    Ok::<(), grasp_torque::Error>(())
+                })?;
+                println!(
+                    "{arg} {} by {}: cold {cold:.2} µs, control loop {warm:.2} µs a tick {methods:?}",
+                    out.status,
+                    out.method.unwrap_or("none"),
+                );
+            }
+        }
+        _ => return Err("usage: fallbacks list | fallbacks time SEED:FRICTION...".into()),
+    }
+    Ok(())
+}
+
+/// The lowest over `rounds` of the mean time of `n` calls, in µs.
+fn best_of<E>(rounds: usize, n: usize, mut f: impl FnMut() -> Result<(), E>) -> Result<f64, E> {
+    let mut best = f64::INFINITY;
+    for _ in 0..rounds {
+        let t = Instant::now();
+        for _ in 0..n {
+            f()?;
+        }
+        best = best.min(t.elapsed().as_secs_f64() / n as f64 * 1e6);
+    }
+    Ok(best)
+}
