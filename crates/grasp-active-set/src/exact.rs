@@ -50,7 +50,8 @@ const FINE_SIDES: usize = 256;
 pub struct ExactSolver {
     qp: TorqueQp,
     conic: ConicForm,
-    ipm: Ipm,
+    /// Built at the grasp's first fallback, then kept (as [`Self::outer`]).
+    ipm: Option<Ipm>,
     /// The view with every exact cone inscribed, and its rows' meaning here: the conic
     /// row of a row both views share, and the (contact, SFCl group) of an inscribed face.
     inner: ActiveSetSolver,
@@ -68,10 +69,12 @@ pub struct ExactSolver {
     /// failed, until Newton solves a grasp again.
     adopted: bool,
     adopt: bool,
-    /// The view with every exact cone circumscribed.
-    outer: ActiveSetSolver,
-    /// The same at [`FINE_SIDES`], built the first time a grasp needs it (at the edge
-    /// of feasibility), then kept for the grasp's next solves.
+    /// The view with every exact cone circumscribed, built the first time a grasp
+    /// needs it (the inscribed polyhedra infeasible, or Newton failing from their
+    /// optimum), then kept for the grasp's next solves: most grasps never need it, and a
+    /// grasp planner builds a solver per grasp.
+    outer: Option<ActiveSetSolver>,
+    /// The same at [`FINE_SIDES`], likewise (at the edge of feasibility).
     fine: Option<ActiveSetSolver>,
     settings: ActiveSetSettings,
     lin: Solution,
@@ -173,8 +176,6 @@ impl ExactSolver {
             soc_group.push((c, group));
         }
         let inner = ActiveSetSolver::new(inner_qp, settings)?;
-        let outer = ActiveSetSolver::new(polyhedral(&qp, &lin, circumscribed_cone), settings)?;
-        let ipm = Ipm::new(&conic, IpmSettings::default());
         // Each cone's contact's minimum normal force row, in the conic form's rows.
         let normal_row = conic
             .soc_contacts
@@ -189,7 +190,7 @@ impl ExactSolver {
         let newton = Newton::new(&conic, normal_row);
         let rows = conic.rows();
         Ok(Self {
-            ipm,
+            ipm: None,
             inner,
             inner_row,
             inner_face,
@@ -199,7 +200,7 @@ impl ExactSolver {
             hot: None,
             adopted: false,
             adopt: true,
-            outer,
+            outer: None,
             fine: None,
             settings,
             lin: Solution::default(),
@@ -217,22 +218,35 @@ impl ExactSolver {
         &self.certificate
     }
 
+    /// Solves the circumscribed polyhedra at `sides` (cold) into `self.lin`, building
+    /// them at the first need; false if they could not be built (their rows are the
+    /// inscribed view's, widened, and share its equalities: not expected).
+    fn solve_outer(&mut self, w: &[f64; 6], sides: usize) -> bool {
+        let slot = if sides == PROOF_SIDES {
+            &mut self.outer
+        } else {
+            &mut self.fine
+        };
+        if slot.is_none() {
+            let lin = Linearization {
+                sides,
+                ..self.qp.constraints.linearization.unwrap_or_default()
+            };
+            let qp = polyhedral(&self.qp, &lin, circumscribed_cone);
+            *slot = ActiveSetSolver::sharing(qp, self.settings, &self.inner).ok();
+        }
+        let Some(view) = slot.as_mut() else {
+            return false;
+        };
+        view.solve_raw(w, &WarmStart::default(), &mut self.lin);
+        true
+    }
+
     /// Whether the circumscribed polyhedra at `sides` admit no torque for `w`; the
     /// reason when they do not.
     fn outer_infeasible(&mut self, w: &[f64; 6], sides: usize) -> Option<Reason> {
-        let cold = WarmStart::default();
-        if sides == PROOF_SIDES {
-            self.outer.solve_raw(w, &cold, &mut self.lin);
-        } else {
-            if self.fine.is_none() {
-                let lin = Linearization {
-                    sides,
-                    ..self.qp.constraints.linearization.unwrap_or_default()
-                };
-                let fine = polyhedral(&self.qp, &lin, circumscribed_cone);
-                self.fine = Some(ActiveSetSolver::new(fine, self.settings).ok()?);
-            }
-            self.fine.as_mut()?.solve_raw(w, &cold, &mut self.lin);
+        if !self.solve_outer(w, sides) {
+            return None;
         }
         (self.lin.status == Status::Infeasible).then(|| Reason::OuterApproximation {
             sides,
@@ -342,7 +356,7 @@ impl ExactSolver {
     fn dual_ray(&mut self, w: &[f64; 6], alpha: f64) -> Option<Reason> {
         let xp = self.newton.particular(w, alpha)?;
         ray_of(
-            &self.ipm,
+            self.ipm.as_ref()?,
             &self.conic,
             &self.b,
             xp,
@@ -408,9 +422,7 @@ impl TorqueSolver for ExactSolver {
                 }
                 // (Inscribed polyhedra that hold the grasp prove nothing about the
                 // circumscribed ones' status: only their optimum is wanted.)
-                self.outer
-                    .solve_raw(w, &WarmStart::default(), &mut self.lin);
-                true
+                self.solve_outer(w, PROOF_SIDES)
             }
             // 2. The circumscribed polyhedra.
             Status::Infeasible => {
@@ -435,46 +447,41 @@ impl TorqueSolver for ExactSolver {
         // grasp infeasible as soon as they show one, several iterations before the
         // method, growing them along it, stalls.
         let mut ray = None;
+        let ipm = self
+            .ipm
+            .get_or_insert_with(|| Ipm::new(&self.conic, IpmSettings::default()));
         let end = {
             let (conic, b, dual, scratch) =
                 (&self.conic, &self.b, &mut self.dual, &mut self.scratch);
             let xp = self.newton.particular(w, alpha);
-            self.ipm.solve(conic, b, &mut |ipm| {
+            ipm.solve(conic, b, &mut |ipm| {
                 if let Some(xp) = xp {
                     ray = ray_of(ipm, conic, b, xp, dual, scratch);
                 }
                 ray.is_some()
             })
         };
-        out.iterations += self.ipm.iterations;
+        out.iterations += ipm.iterations;
         out.method = Some("interior_point");
         if let Some(reason) = ray {
             return Self::infeasible(out, reason);
         }
         if end == IpmEnd::Converged {
-            self.ipm.dual_into(&self.conic, &mut self.dual);
+            ipm.dual_into(&self.conic, &mut self.dual);
             self.certificate = self.conic.certificate(
                 &self.b,
-                &self.ipm.x,
+                &ipm.x,
                 &self.dual,
                 CERTIFICATE_TOLERANCE,
                 &mut self.scratch,
             );
             if self.certificate.passed {
                 out.status = Status::Optimal;
-                self.conic.unscale_into(
-                    &self.ipm.x,
-                    alpha,
-                    &mut out.torque,
-                    &mut out.internal_forces,
-                );
+                self.conic
+                    .unscale_into(&ipm.x, alpha, &mut out.torque, &mut out.internal_forces);
                 // A warm solve starts Newton from this answer: near it, Newton often
                 // converges where it did not from the polyhedra.
-                if self.adopt
-                    && self
-                        .newton
-                        .adopt(&self.conic, &self.ipm.x, &self.dual, w, alpha)
-                {
+                if self.adopt && self.newton.adopt(&self.conic, &ipm.x, &self.dual, w, alpha) {
                     self.hot = Some(alpha);
                     self.adopted = true;
                 }
@@ -578,10 +585,11 @@ mod tests {
             let model = Arc::new(GraspModel::new(&p, &ModelOptions::default()).unwrap());
             let mut s = ExactSolver::new(TorqueQp::exact(model), Default::default()).unwrap();
             let alpha = s.conic.b_into(&p.wrench, &mut s.b);
-            if alpha == 0.0 || s.ipm.solve(&s.conic, &s.b, &mut |_| false) != IpmEnd::Converged {
+            let ipm = s.ipm.insert(Ipm::new(&s.conic, IpmSettings::default()));
+            if alpha == 0.0 || ipm.solve(&s.conic, &s.b, &mut |_| false) != IpmEnd::Converged {
                 continue;
             }
-            s.ipm.dual_into(&s.conic, &mut s.dual);
+            ipm.dual_into(&s.conic, &mut s.dual);
             let Some(xp) = s.newton.particular(&p.wrench, alpha) else {
                 continue;
             };

@@ -268,6 +268,30 @@ impl ActiveSetSolver {
         Ok(Self { qp, engine })
     }
 
+    /// As [`Self::new`], with the equalities eliminated by `other` when `qp` has the
+    /// same ones (the same C, `e(w)` and weights): another polyhedral view of its grasp.
+    pub(crate) fn sharing(
+        qp: TorqueQp,
+        settings: ActiveSetSettings,
+        other: &Self,
+    ) -> Result<Self, BuildError> {
+        settings.validate()?;
+        let (ld, of) = (qp.least_distance(), other.qp.least_distance());
+        let engine = if ld.eq == of.eq && ld.eq_w == of.eq_w && ld.weights == of.weights {
+            let e = &other.engine;
+            let eqs = Equalities {
+                dinv: e.dinv.clone(),
+                null_basis: e.null_basis.clone(),
+                // (pu_cols holds −pu column-major: negation is exact.)
+                pu: Matrix::from_fn(e.m, 6, |i, j| -e.pu_cols[j * e.m + i]),
+            };
+            Engine::with_equalities(&ld, settings, eqs)?
+        } else {
+            Engine::new(&ld, settings)?
+        };
+        Ok(Self { qp, engine })
+    }
+
     /// The settings in use.
     pub fn settings(&self) -> &ActiveSetSettings {
         &self.engine.settings
@@ -306,9 +330,19 @@ impl ForceSpaceSolver {
     }
 }
 
-impl Engine {
-    fn new(qp: &LeastDistance<'_>, settings: ActiveSetSettings) -> Result<Self, BuildError> {
-        settings.validate()?;
+/// The consistency equalities eliminated: everything of the engine that depends on C,
+/// `e(w)` and the weights alone, not on the rows of H. Views of one grasp with other
+/// polyhedra share it (the exact solver's inscribed and circumscribed ones).
+#[derive(Clone, Debug)]
+struct Equalities {
+    dinv: Vec<f64>,
+    null_basis: Matrix,
+    /// `pu` (m × 6): `u0 = Cd⁺ e(w) = pu · w`.
+    pu: Matrix,
+}
+
+impl Equalities {
+    fn new(qp: &LeastDistance<'_>) -> Result<Self, BuildError> {
         let m = qp.h.ncols();
         let dinv: Vec<f64> = qp.weights.iter().map(|w| 1.0 / w.sqrt()).collect();
         let cd = Matrix::from_fn(qp.eq.nrows(), m, |i, j| qp.eq[(i, j)] * dinv[j]);
@@ -322,10 +356,34 @@ impl Engine {
                 rows: rc,
             });
         }
-        let k = m - rc;
-        let null_basis = dec.null_basis;
         // u0 = Cd⁺ e = −row_basis (row_transform eq_w) w: the small product first.
         let pu = dec.row_basis.matmul(&dec.row_transform.matmul(qp.eq_w));
+        Ok(Self {
+            dinv,
+            null_basis: dec.null_basis,
+            pu,
+        })
+    }
+}
+
+impl Engine {
+    fn new(qp: &LeastDistance<'_>, settings: ActiveSetSettings) -> Result<Self, BuildError> {
+        settings.validate()?;
+        Self::with_equalities(qp, settings, Equalities::new(qp)?)
+    }
+
+    fn with_equalities(
+        qp: &LeastDistance<'_>,
+        settings: ActiveSetSettings,
+        eqs: Equalities,
+    ) -> Result<Self, BuildError> {
+        let m = qp.h.ncols();
+        let Equalities {
+            dinv,
+            null_basis,
+            pu,
+        } = eqs;
+        let k = null_basis.ncols();
         let mut null_cols = vec![0.0; m * k];
         write_columns(&null_basis, &mut null_cols, m);
         let mut pu_cols = vec![0.0; m * 6];

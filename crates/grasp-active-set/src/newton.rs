@@ -36,7 +36,6 @@
 
 use crate::dense::{backward, cholesky, dot4, forward, schur};
 use grasp_core::conic::soc_excess;
-use grasp_core::linalg::{decompose, RankThreshold};
 use grasp_core::matrix::{add_columns, column_major, norm_inf};
 use grasp_core::{ConeKind, ConicForm, Matrix};
 
@@ -191,34 +190,37 @@ impl Newton {
             }
             row += cone.dim();
         }
-        let e = Matrix::from_fn(eq, n, |i, j| form.a[(i, j)]);
-        let (null_basis, e_pinv) = if eq == 0 {
+        // The form's decomposition of its (independent, normalised) equality rows; rows
+        // it could not eliminate leave an empty basis, which marks Newton unusable
+        // (see `solve`).
+        let (null_basis_t, e_pinv) = if eq == 0 {
             (Matrix::identity(n), Matrix::zeros(n, 0))
         } else {
-            // The core hands over independent, normalised equality rows.
-            match decompose(&e, RankThreshold::Relative(1e-13)) {
-                Ok(d) if d.rank() == eq => (d.null_basis.clone(), d.pseudo_inverse()),
-                // Not eliminable: an empty basis marks Newton unusable (see `solve`).
+            match (&form.eq_null_t, &form.eq_pinv) {
+                (Some(nt), Some(pinv)) => (nt.clone(), pinv.clone()),
                 _ => (Matrix::zeros(0, 0), Matrix::zeros(n, eq)),
             }
         };
+        let null_basis = null_basis_t.transpose();
         let k = null_basis.ncols();
+        // (Each entry a dot product with a row: Nᵀ's rows are N's columns.)
         let a_red = Matrix::from_fn(rows, k, |i, j| {
             if i < eq {
                 0.0
             } else {
-                dot4(form.a.row(i), &column(&null_basis, j))
+                dot4(form.a.row(i), null_basis_t.row(j))
             }
         });
-        // [b0 | bw] restricted to the equalities, then through E⁺ and A E⁺.
-        let be = Matrix::from_fn(eq, 7, |i, c| {
+        // [b0 | bw] restricted to the equalities, then through E⁺ and A E⁺ (both
+        // transposed, so that each entry is a dot product of rows).
+        let be_t = Matrix::from_fn(7, eq, |c, i| {
             if c == 0 {
                 form.b0[i]
             } else {
                 form.bw[(i, c - 1)]
             }
         });
-        let xp_map = Matrix::from_fn(form.nx, 7, |j, c| dot4(e_pinv.row(j), &column(&be, c)));
+        let xp_map_t = Matrix::from_fn(7, form.nx, |c, j| dot4(e_pinv.row(j), be_t.row(c)));
         let b_red_map = Matrix::from_fn(rows, 7, |i, c| {
             let b = if c == 0 {
                 form.b0[i]
@@ -228,7 +230,7 @@ impl Newton {
             if i < eq {
                 0.0
             } else {
-                b - dot4(form.a.row(i), &column(&xp_map, c))
+                b - dot4(form.a.row(i), xp_map_t.row(c))
             }
         });
         let n = k;
@@ -244,8 +246,8 @@ impl Newton {
             .collect();
         Self {
             b_red_cols: column_major(rows - eq, 7, |i, c| b_red_map[(eq + i, c)]),
-            xp_cols: column_major(form.nx, 7, |j, c| xp_map[(j, c)]),
-            null_basis_t: null_basis.transpose(),
+            xp_cols: column_major(form.nx, 7, |j, c| xp_map_t[(c, j)]),
+            null_basis_t,
             null_basis,
             a_red_cols: (0..(rows - eq) * k)
                 .map(|x| a_red[(eq + x % (rows - eq), x / (rows - eq))])
@@ -1409,10 +1411,6 @@ impl Newton {
         }
         Step::Failed
     }
-}
-
-fn column(m: &Matrix, j: usize) -> Vec<f64> {
-    (0..m.nrows()).map(|i| m[(i, j)]).collect()
 }
 
 fn soc_norm(v: &[f64]) -> f64 {

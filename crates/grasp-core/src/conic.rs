@@ -86,6 +86,11 @@ pub struct ConicForm {
     /// `P x + A_inᵀ z_in` projected on it: a z on the equalities that cancels the rest
     /// exists exactly when the projection vanishes, so none is needed.
     pub eq_null_t: Option<Matrix>,
+    /// The equality rows' pseudo-inverse `E⁺` (nx × p) from the same decomposition,
+    /// when the rank it decides is p; `None` otherwise, and without equalities. Newton
+    /// eliminates the equalities with it ([`Self::eq_null_t`] and `E⁺`), so the rows
+    /// are decomposed once per grasp.
+    pub eq_pinv: Option<Matrix>,
     /// `A` with its rows zero-padded to a multiple of four columns, and per row the
     /// span of four-column blocks holding its nonzeros: a torque limit or a minimum
     /// normal force touches few, and the certificate's passes over A run whole blocks.
@@ -124,18 +129,16 @@ impl ConicForm {
         // Column scales: the force response of a unit of each variable. A variable
         // with no response at rounding level (a joint that moves no contact) takes the
         // largest scale, so that its rounding-level column does not blow up.
+        let mut v = vec![0.0; model.force_dim()];
         let mut col_scale: Vec<f64> = (0..nx)
             .map(|j| {
-                let v: Vec<f64> = (0..model.force_dim())
-                    .map(|i| {
-                        fscale[i]
-                            * if j < m {
-                                model.z2[(i, j)]
-                            } else {
-                                model.passive_basis[(i, j - m)]
-                            }
-                    })
-                    .collect();
+                for (i, (vi, f)) in v.iter_mut().zip(&fscale).enumerate() {
+                    *vi = f * if j < m {
+                        model.z2[(i, j)]
+                    } else {
+                        model.passive_basis[(i, j - m)]
+                    };
+                }
                 norm2(&v)
             })
             .collect();
@@ -159,11 +162,15 @@ impl ConicForm {
             let mut a = vec![0.0; nx];
             let mut bw = [0.0; 6];
             for &(i, c) in v {
-                for j in 0..m {
-                    a[j] -= c * model.z2[(i, j)] / col_scale[j];
+                for ((aj, z), s) in a.iter_mut().zip(model.z2.row(i)).zip(&col_scale) {
+                    *aj -= c * z / s;
                 }
-                for j in 0..d {
-                    a[m + j] -= c * model.passive_basis[(i, j)] / col_scale[m + j];
+                for ((aj, p), s) in a[m..]
+                    .iter_mut()
+                    .zip(model.passive_basis.row(i))
+                    .zip(&col_scale[m..])
+                {
+                    *aj -= c * p / s;
                 }
                 for (bj, z) in bw.iter_mut().zip(model.z1.row(i)) {
                     *bj += c * z;
@@ -174,15 +181,10 @@ impl ConicForm {
         let mut zero = Vec::new();
         for i in 0..model.equality_rows() {
             // C τ = −eq_w w, each row normalised in the scaled variables.
-            let mut a: Vec<f64> = (0..nx)
-                .map(|j| {
-                    if j < m {
-                        model.eq[(i, j)] / col_scale[j]
-                    } else {
-                        0.0
-                    }
-                })
-                .collect();
+            let mut a = vec![0.0; nx];
+            for ((aj, e), s) in a.iter_mut().zip(model.eq.row(i)).zip(&col_scale) {
+                *aj = e / s;
+            }
             let nrm = norm2(&a).max(f64::MIN_POSITIVE);
             a.iter_mut().for_each(|v| *v /= nrm);
             let mut bw = [0.0; 6];
@@ -201,11 +203,11 @@ impl ConicForm {
                 _ => 1.0,
             };
             let mut a = vec![0.0; nx];
-            for j in 0..m {
-                a[j] = -rho * qp.h[(i, j)] / col_scale[j];
+            for ((aj, h), s) in a.iter_mut().zip(qp.h.row(i)).zip(&col_scale) {
+                *aj = -rho * h / s;
             }
-            for j in 0..d {
-                a[m + j] = -rho * qp.hp[(i, j)] / col_scale[m + j];
+            for ((aj, h), s) in a[m..].iter_mut().zip(qp.hp.row(i)).zip(&col_scale[m..]) {
+                *aj = -rho * h / s;
             }
             let mut bw = [0.0; 6];
             for (j, v) in bw.iter_mut().enumerate() {
@@ -284,19 +286,29 @@ impl ConicForm {
             })
             .collect();
         let padded = nx.div_ceil(4) * 4;
-        let a = Matrix::from_fn(n, nx, |i, j| rows[i].a[j]);
+        let a = Matrix::from_rows_data(
+            n,
+            nx,
+            rows.iter().flat_map(|r| r.a.iter().copied()).collect(),
+        );
         let eq = match cones.first() {
             Some(&ConeKind::Zero(p)) => p,
             _ => 0,
         };
         // (Independent rows from the core; a failed decomposition leaves the basis
         // out, and the certificate then fails rather than guess.)
-        let eq_null_t = (eq > 0).then(|| {
+        let (eq_null_t, eq_pinv) = if eq > 0 {
             let e = Matrix::from_fn(eq, nx, |i, j| a[(i, j)]);
-            decompose(&e, RankThreshold::Relative(1e-13))
-                .map(|d| d.null_basis.transpose())
-                .unwrap_or_else(|_| Matrix::zeros(0, 0))
-        });
+            match decompose(&e, RankThreshold::Relative(1e-13)) {
+                Ok(d) => {
+                    let pinv = (d.rank() == eq).then(|| d.pseudo_inverse());
+                    (Some(d.null_basis.transpose()), pinv)
+                }
+                Err(_) => (Some(Matrix::zeros(0, 0)), None),
+            }
+        } else {
+            (None, None)
+        };
         Self {
             a_cols: column_major(n, nx, |i, j| a[(i, j)]),
             abs_cols: column_major(n, nx, |i, j| a[(i, j)].abs()),
@@ -307,6 +319,7 @@ impl ConicForm {
             a_padded: Matrix::from_fn(n, padded, |i, j| if j < nx { a[(i, j)] } else { 0.0 }),
             a,
             eq_null_t,
+            eq_pinv,
             row_span,
             b0: rows.iter().map(|r| r.b0).collect(),
             bw: Matrix::from_fn(n, 6, |i, j| rows[i].bw[j]),
