@@ -175,7 +175,7 @@ impl ExactSolver {
             let group = soc_group.iter().filter(|(d, _)| *d == c).count();
             soc_group.push((c, group));
         }
-        let inner = ActiveSetSolver::new(inner_qp, settings)?;
+        let inner = ActiveSetSolver::from_form(inner_qp, settings, &conic)?;
         // Each cone's contact's minimum normal force row, in the conic form's rows.
         let normal_row = conic
             .soc_contacts

@@ -26,8 +26,8 @@
 use grasp_core::linalg::{decompose, RankThreshold};
 use grasp_core::matrix::{add_columns, column_major, dot, min_value, norm_inf, write_columns};
 use grasp_core::{
-    Capabilities, ForceSpaceQp, LeastDistance, Matrix, Reason, RowId, Solution, Status, TorqueQp,
-    TorqueSolver, WarmStart,
+    Capabilities, ConicForm, ForceSpaceQp, LeastDistance, Matrix, Reason, RowId, Solution, Status,
+    TorqueQp, TorqueSolver, WarmStart,
 };
 
 mod dense;
@@ -289,6 +289,40 @@ impl ActiveSetSolver {
         } else {
             Engine::new(&ld, settings)?
         };
+        Ok(Self { qp, engine })
+    }
+
+    /// As [`Self::new`] for a polyhedral view of the grasp of `form` (the exact view's
+    /// conic form), with the equalities eliminated through the form's decomposition of
+    /// them, which differs from C D⁻¹ᐟ² only by row and column scales (the same null
+    /// space, and a pseudo-inverse rescaled). A form with free internal forces or
+    /// dependent equalities leaves it to [`Self::new`].
+    pub(crate) fn from_form(
+        qp: TorqueQp,
+        settings: ActiveSetSettings,
+        form: &ConicForm,
+    ) -> Result<Self, BuildError> {
+        settings.validate()?;
+        let ld = qp.least_distance();
+        let p = ld.eq.nrows();
+        let eqs = match (&form.eq_null_t, &form.eq_pinv) {
+            (Some(nt), Some(pinv)) if form.free == 0 && pinv.ncols() == p => {
+                // x = (k/α) D^½ τ on the torques (col_scale = k √w), so the form's
+                // particular solution x_p = E⁺ bw_E w / α is u0 = E⁺ bw_E w / k, and
+                // u0 = −pu w.
+                let k = 1.0 / form.kappa.sqrt();
+                let pu = Matrix::from_fn(form.joints, 6, |i, j| {
+                    -(0..p).map(|l| pinv[(i, l)] * form.bw[(l, j)]).sum::<f64>() / k
+                });
+                Equalities {
+                    dinv: ld.weights.iter().map(|w| 1.0 / w.sqrt()).collect(),
+                    null_basis: nt.transpose(),
+                    pu,
+                }
+            }
+            _ => Equalities::new(&ld)?,
+        };
+        let engine = Engine::with_equalities(&ld, settings, eqs)?;
         Ok(Self { qp, engine })
     }
 
