@@ -36,7 +36,7 @@
 
 use crate::dense::{backward, cholesky, dot4, forward, schur};
 use grasp_core::conic::soc_excess;
-use grasp_core::matrix::{add_columns, column_major, norm_inf};
+use grasp_core::matrix::{add_column_block, add_columns, column_major, norm_inf};
 use grasp_core::{ConeKind, ConicForm, Matrix};
 
 /// Largest tail of a second-order cone (the friction cones' are 2 or 3 long).
@@ -203,16 +203,25 @@ impl Newton {
         };
         let null_basis = null_basis_t.transpose();
         let k = null_basis.ncols();
-        // (Each entry a dot product with a row: Nᵀ's rows are N's columns.)
+        let inq = rows - eq;
+        // A N on the rows past the equalities (eliminated), column-major: a pass down
+        // A's columns per column of N (Nᵀ's rows).
+        let mut a_red_cols = vec![0.0; inq * k];
+        for (col, x) in a_red_cols
+            .chunks_exact_mut(inq.max(1))
+            .zip(null_basis_t.as_slice().chunks_exact(n.max(1)))
+        {
+            add_column_block(col, form.a_cols(), rows, eq, x, 1.0);
+        }
         let a_red = Matrix::from_fn(rows, k, |i, j| {
             if i < eq {
                 0.0
             } else {
-                dot4(form.a.row(i), null_basis_t.row(j))
+                a_red_cols[j * inq + i - eq]
             }
         });
-        // [b0 | bw] restricted to the equalities, then through E⁺ and A E⁺ (both
-        // transposed, so that each entry is a dot product of rows).
+        // [b0 | bw] on the equalities through E⁺ (x_p's map), then b − A x_p on the
+        // rest, likewise.
         let be_t = Matrix::from_fn(7, eq, |c, i| {
             if c == 0 {
                 form.b0[i]
@@ -220,19 +229,20 @@ impl Newton {
                 form.bw[(i, c - 1)]
             }
         });
-        let xp_map_t = Matrix::from_fn(7, form.nx, |c, j| dot4(e_pinv.row(j), be_t.row(c)));
-        let b_red_map = Matrix::from_fn(rows, 7, |i, c| {
-            let b = if c == 0 {
-                form.b0[i]
+        let xp_cols = column_major(form.nx, 7, |j, c| dot4(e_pinv.row(j), be_t.row(c)));
+        let mut b_red_cols = column_major(inq, 7, |i, c| {
+            if c == 0 {
+                form.b0[eq + i]
             } else {
-                form.bw[(i, c - 1)]
-            };
-            if i < eq {
-                0.0
-            } else {
-                b - dot4(form.a.row(i), xp_map_t.row(c))
+                form.bw[(eq + i, c - 1)]
             }
         });
+        for (col, x) in b_red_cols
+            .chunks_exact_mut(inq.max(1))
+            .zip(xp_cols.chunks_exact(n.max(1)))
+        {
+            add_column_block(col, form.a_cols(), rows, eq, x, -1.0);
+        }
         let n = k;
         let ncmax = (orth.1 - orth.0) + socs.iter().map(|&(_, d)| d).sum::<usize>();
         // SFCl's two cones are consecutive, and the only ones of their contact.
@@ -245,13 +255,11 @@ impl Newton {
             })
             .collect();
         Self {
-            b_red_cols: column_major(rows - eq, 7, |i, c| b_red_map[(eq + i, c)]),
-            xp_cols: column_major(form.nx, 7, |j, c| xp_map_t[(c, j)]),
+            b_red_cols,
+            xp_cols,
             null_basis_t,
             null_basis,
-            a_red_cols: (0..(rows - eq) * k)
-                .map(|x| a_red[(eq + x % (rows - eq), x / (rows - eq))])
-                .collect(),
+            a_red_cols,
             a_scale: a_red.max_abs(),
             a_red,
             b_red: vec![0.0; rows],

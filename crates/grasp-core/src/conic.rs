@@ -332,6 +332,11 @@ impl ConicForm {
         }
     }
 
+    /// `A` column-major (column j at `j · rows..`).
+    pub fn a_cols(&self) -> &[f64] {
+        &self.a_cols
+    }
+
     /// Number of rows.
     pub fn rows(&self) -> usize {
         self.a.nrows()
