@@ -23,11 +23,11 @@
 //! (most negative multiplier, Step 4): O(k²) per iteration, no allocation.
 //! Zero-length steps switch to Bland's rule, which rules out cycling.
 
-use grasp_core::linalg::{decompose, RankThreshold};
+use grasp_core::linalg::{decompose, orthonormal_columns, RankThreshold};
 use grasp_core::matrix::{add_columns, column_major, dot, min_value, norm_inf, write_columns};
 use grasp_core::{
-    Capabilities, ConicForm, ForceSpaceQp, LeastDistance, Matrix, Reason, RowId, Solution, Status,
-    TorqueQp, TorqueSolver, WarmStart,
+    Capabilities, ConicForm, EqFactors, ForceSpaceQp, LeastDistance, Matrix, Reason, RowId,
+    Solution, Status, TorqueQp, TorqueSolver, WarmStart,
 };
 
 mod dense;
@@ -375,8 +375,30 @@ struct Equalities {
     pu: Matrix,
 }
 
+/// Whether [`Equalities::from_factors`] costs fewer floating-point operations than the
+/// decomposition of C, to leading order, for m torques and p equalities: its thin QR
+/// of m × k (k = m − p; twice 2mk² − ⅔k³ with its Q) and three products with the
+/// wrench's six columns, against the QR of C's p rows with its full m × m Q
+/// (4m²p − 2mp² + 4p³/3) and the pseudo-inverse's products. With few equalities
+/// (p < k, roughly) the decomposition is the cheaper.
+fn factors_cheaper(m: usize, p: usize) -> bool {
+    let (mf, pf, kf) = (m as f64, p as f64, m.saturating_sub(p) as f64);
+    let factored = 4.0 * mf * kf * kf - 4.0 / 3.0 * kf.powi(3) + 6.0 * mf * (pf + 2.0 * kf);
+    let decomposed =
+        4.0 * mf * mf * pf - 2.0 * mf * pf * pf + 4.0 / 3.0 * pf.powi(3) + 6.0 * pf * (pf + mf);
+    factored < decomposed
+}
+
 impl Equalities {
     fn new(qp: &LeastDistance<'_>) -> Result<Self, BuildError> {
+        let cheaper = factors_cheaper(qp.h.ncols(), qp.eq.nrows());
+        if let Some(eqs) = qp
+            .eq_factors
+            .filter(|_| cheaper)
+            .and_then(|f| Self::from_factors(qp, f))
+        {
+            return Ok(eqs);
+        }
         let m = qp.h.ncols();
         let dinv: Vec<f64> = qp.weights.iter().map(|w| 1.0 / w.sqrt()).collect();
         let cd = Matrix::from_fn(qp.eq.nrows(), m, |i, j| qp.eq[(i, j)] * dinv[j]);
@@ -395,6 +417,74 @@ impl Equalities {
         Ok(Self {
             dinv,
             null_basis: dec.null_basis,
+            pu,
+        })
+    }
+
+    /// The same from the model's factors `C = Bᵀ diag(r)` (no decomposition of C): in
+    /// `u = D^½ τ`, `C D⁻¹ᐟ² u = 0 ⇔ u ∈ diag(g) range(N_B)` with `g = √w / r`, so N is
+    /// an orthonormal basis of `diag(g) N_B` (a thin QR); and `u = diag(g) B v` solves
+    /// `C D⁻¹ᐟ² u = v` (`BᵀB = I`), so the least-norm solution is that minus its part
+    /// in N. `None` (the decomposition decides) without equalities, or when the
+    /// weighting leaves `diag(g) N_B` near rank-deficient.
+    fn from_factors(qp: &LeastDistance<'_>, f: EqFactors<'_>) -> Option<Self> {
+        let (p, m) = (qp.eq.nrows(), qp.h.ncols());
+        if p == 0
+            || f.basis.nrows() != m
+            || f.basis.ncols() != p
+            || f.null.nrows() != m
+            || m.checked_sub(p) != Some(f.null.ncols())
+            || f.scale.len() != m
+            || qp.weights.len() != m
+        {
+            return None;
+        }
+        let g: Vec<f64> = qp
+            .weights
+            .iter()
+            .zip(f.scale)
+            .map(|(w, r)| w.sqrt() / r)
+            .collect();
+        let y = Matrix::from_fn(m, m - p, |i, j| g[i] * f.null[(i, j)]);
+        let null_basis = orthonormal_columns(&y)?;
+        // diag(g) B eq_w, then less N (Nᵀ ·): rows of six, as fixed arrays.
+        let mut rows = vec![[0.0f64; 6]; m];
+        for ((row, b), gi) in rows
+            .iter_mut()
+            .zip(f.basis.as_slice().chunks_exact(p))
+            .zip(&g)
+        {
+            for (bl, e) in b.iter().zip(qp.eq_w.as_slice().chunks_exact(6)) {
+                for (v, e) in row.iter_mut().zip(e) {
+                    *v += bl * e;
+                }
+            }
+            row.iter_mut().for_each(|v| *v *= gi);
+        }
+        let kk = m - p;
+        let mut ntp = vec![[0.0f64; 6]; kk];
+        for (n, row) in null_basis.as_slice().chunks_exact(kk.max(1)).zip(&rows) {
+            for (t, nij) in ntp.iter_mut().zip(n) {
+                for (t, v) in t.iter_mut().zip(row) {
+                    *t += nij * v;
+                }
+            }
+        }
+        for (n, row) in null_basis
+            .as_slice()
+            .chunks_exact(kk.max(1))
+            .zip(rows.iter_mut())
+        {
+            for (t, nij) in ntp.iter().zip(n) {
+                for (v, t) in row.iter_mut().zip(t) {
+                    *v -= nij * t;
+                }
+            }
+        }
+        let pu = Matrix::from_rows_data(m, 6, rows.concat());
+        Some(Self {
+            dinv: qp.weights.iter().map(|w| 1.0 / w.sqrt()).collect(),
+            null_basis,
             pu,
         })
     }
@@ -1294,5 +1384,80 @@ impl<'s> Iter<'s> {
             }
         }
         End::Optimal
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use grasp_core::{GraspModel, ModelOptions};
+    use std::sync::Arc;
+
+    /// The model's factors of C give the decomposition's subspace and least-norm
+    /// solution, whatever the weights: the same projector `N Nᵀ` and the same `pu`, to
+    /// rounding amplified by the weighting's spread.
+    #[test]
+    fn the_factored_equalities_are_the_decomposed_ones() {
+        let mut rng = grasp_testkit::Rng(7);
+        let mut checked = 0;
+        for seed in 0..200u64 {
+            let mut p = grasp_testkit::sweep_grasp(seed, 1.0);
+            // Weights over up to six decades.
+            let spread = [0.0, 2.0, 6.0][seed as usize % 3];
+            p.torque_weights = Some(
+                (0..p.joints())
+                    .map(|_| 10f64.powf(rng.uniform(-spread / 2.0, spread / 2.0)))
+                    .collect(),
+            );
+            let Ok(model) = GraspModel::new(&p, &ModelOptions::default()) else {
+                continue;
+            };
+            let m = model.joints();
+            let qp = TorqueQp::linearized(Arc::new(model), &Default::default());
+            let ld = qp.least_distance();
+            if ld.eq.nrows() == 0 {
+                continue;
+            }
+            let Some(f) = Equalities::from_factors(&ld, ld.eq_factors.unwrap()) else {
+                panic!("seed {seed}: no factored equalities");
+            };
+            let d = Equalities::new(&LeastDistance {
+                eq_factors: None,
+                ..ld
+            })
+            .unwrap();
+            let proj = |n: &Matrix| n.matmul(&n.transpose());
+            let (pf, pd) = (proj(&f.null_basis), proj(&d.null_basis));
+            let gap = pf
+                .as_slice()
+                .iter()
+                .zip(pd.as_slice())
+                .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+            // κ of the column scaling √w / r that separates the two ways.
+            let g: Vec<f64> = (0..m)
+                .map(|j| ld.weights[j].sqrt() / qp.model.torque_scale[j])
+                .collect();
+            let kappa = g.iter().fold(0.0f64, |a, v| a.max(*v))
+                / g.iter().fold(f64::INFINITY, |a, v| a.min(*v));
+            let tol = 10.0 * m as f64 * f64::EPSILON * kappa;
+            assert!(
+                gap <= tol,
+                "seed {seed}: projectors differ by {gap:.1e} > {tol:.1e}"
+            );
+            let scale = d.pu.max_abs().max(f64::MIN_POSITIVE);
+            let du =
+                f.pu.as_slice()
+                    .iter()
+                    .zip(d.pu.as_slice())
+                    .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+            assert!(
+                du <= tol * scale,
+                "seed {seed}: pu differs by {:.1e} > {:.1e}",
+                du / scale,
+                tol
+            );
+            checked += 1;
+        }
+        assert!(checked >= 150, "only {checked} grasps checked");
     }
 }

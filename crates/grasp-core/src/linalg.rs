@@ -377,6 +377,39 @@ fn explicit_q(w: &[f64], len: usize, k: usize, vhead: &[f64], tau: &[f64]) -> Ve
     q
 }
 
+/// An orthonormal basis of the range of the tall `y` (rows ≥ cols), rows × cols, by
+/// Householder QR (backward stable: the basis is that of a matrix within rounding of
+/// `y`), when R shows full column rank clearly, `min |r_ii| > 1e-6 max |r_ii|`; `None`
+/// otherwise (and for a wide or non-finite `y`).
+pub fn orthonormal_columns(y: &Matrix) -> Option<Matrix> {
+    let (len, k) = (y.nrows(), y.ncols());
+    if k > len || !y.as_slice().iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let mut w = longer_side(y);
+    let (mut vhead, mut tau) = (vec![0.0; k], vec![0.0; k]);
+    householder(&mut w, len, k, &mut vhead, &mut tau);
+    let (lo, hi) = (0..k).fold((f64::INFINITY, 0.0f64), |(lo, hi), i| {
+        let d = w[i * len + i].abs();
+        (lo.min(d), hi.max(d))
+    });
+    if k > 0 && (lo.is_nan() || lo <= 1e-6 * hi) {
+        return None;
+    }
+    // Q e_j for j < k only: reflector c touches columns c..k of them.
+    let mut q = vec![0.0; len * k];
+    for e in 0..k {
+        q[e * len + e] = 1.0;
+    }
+    for c in (0..k).rev() {
+        if tau[c] != 0.0 {
+            let v = &w[c * len + c + 1..(c + 1) * len];
+            reflect(vhead[c], v, tau[c], &mut q[c * len..], len, c);
+        }
+    }
+    Some(Matrix::from_fn(len, k, |i, j| q[j * len + i]))
+}
+
 /// The columns of the longer side of `a`, column-major: its columns, or its rows when
 /// it is wide.
 fn longer_side(a: &Matrix) -> Vec<f64> {

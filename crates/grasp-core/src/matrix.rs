@@ -174,6 +174,11 @@ impl Matrix {
         self.data.iter().fold(0.0, |m, v| m.max(v.abs()))
     }
 
+    /// The entries, row by row, mutably.
+    pub fn as_mut_slice(&mut self) -> &mut [f64] {
+        &mut self.data
+    }
+
     /// The entries, row by row.
     pub fn as_slice(&self) -> &[f64] {
         &self.data

@@ -144,6 +144,12 @@ pub struct GraspModel {
     pub passive_basis: Matrix,
     /// C, p × m with independent rows (empty in the paper model).
     pub eq: Matrix,
+    /// C's factors: `C = Bᵀ diag(torque_scale)` with B (m × p, this) orthonormal.
+    pub eq_basis: Matrix,
+    /// An orthonormal basis of the null space of Bᵀ, m × (m − p), so that
+    /// `C τ = 0 ⇔ torque_scale ⊙ τ ∈ range(eq_null)`. A backend that weights the
+    /// torques finds the null space of its weighted C from it without a decomposition.
+    pub eq_null: Matrix,
     /// `e(w) = −eq_w · w`, p × 6.
     pub eq_w: Matrix,
     /// `unreachable · w ≠ 0` means no torque satisfies `C τ = e(w)`, q × 6 (in
@@ -381,11 +387,13 @@ impl GraspModel {
         let mut wrench_scale = [1.0; 6];
         wrench_scale.copy_from_slice(&r[..6]);
 
-        let (eq, eq_w, unreachable) = match opts.equilibrium {
+        let (eq, eq_w, unreachable, eq_basis, eq_null) = match opts.equilibrium {
             Equilibrium::PaperModel => (
                 Matrix::zeros(0, m),
                 Matrix::zeros(0, 6),
                 Matrix::zeros(0, 6),
+                Matrix::zeros(m, 0),
+                Matrix::identity(m),
             ),
             Equilibrium::Consistent => {
                 // U⊥ᵀ R [w; 0; τ] = 0 with x = R_τ τ: P_τ x = −P_w R_w w.
@@ -417,7 +425,7 @@ impl GraspModel {
                         .map(|k| dc.left_null[(k, i)] * pw0[(k, j)])
                         .sum::<f64>()
                 });
-                (eq, eq_w, unreachable)
+                (eq, eq_w, unreachable, dc.row_basis, dc.null_basis)
             }
         };
         let min_normal_force = p
@@ -470,6 +478,8 @@ impl GraspModel {
             passive_basis,
             eq,
             eq_w,
+            eq_basis,
+            eq_null,
             unreachable,
             wrench_scale,
             unactuated_scale: r[6..6 + k].to_vec(),

@@ -160,6 +160,24 @@ pub struct LeastDistance<'a> {
     pub rows: &'a [RowId],
     /// How `h` was formed, when it is `S Z2` (see [`RowFactors`]).
     pub factors: Option<RowFactors<'a>>,
+    /// How `eq` was formed, when the model's consistency rows are it (see
+    /// [`EqFactors`]).
+    pub eq_factors: Option<EqFactors<'a>>,
+}
+
+/// `C = Bᵀ diag(scale)` with B orthonormal (m × p), and `null` an orthonormal basis of
+/// the null space of Bᵀ (m × (m − p)): [`GraspModel::eq_basis`],
+/// [`GraspModel::eq_null`] and [`GraspModel::torque_scale`]. With them, the null space
+/// of C under any diagonal weighting is a rescaled `null`, and `B` gives a particular
+/// solution of `C τ = e`: no decomposition of C is needed.
+#[derive(Clone, Copy, Debug)]
+pub struct EqFactors<'a> {
+    /// B, m × p.
+    pub basis: &'a Matrix,
+    /// An orthonormal basis of the null space of Bᵀ, m × (m − p).
+    pub null: &'a Matrix,
+    /// The column scale, m.
+    pub scale: &'a [f64],
 }
 
 /// `H = S Z2` with S block-diagonal (at most four nonzeros per row), and ±1 in the
@@ -459,6 +477,11 @@ impl TorqueQp {
                 contacts: &self.contacts,
                 cones: &self.constraints.cones,
             }),
+            eq_factors: Some(EqFactors {
+                basis: &self.model.eq_basis,
+                null: &self.model.eq_null,
+                scale: &self.model.torque_scale,
+            }),
         }
     }
 }
@@ -562,6 +585,7 @@ impl ForceSpaceQp {
             weights: &self.weights,
             rows: &self.rows,
             factors: None,
+            eq_factors: None,
         }
     }
 
