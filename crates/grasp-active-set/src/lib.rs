@@ -311,9 +311,16 @@ impl ActiveSetSolver {
                 // particular solution x_p = E⁺ bw_E w / α is u0 = E⁺ bw_E w / k, and
                 // u0 = −pu w.
                 let k = 1.0 / form.kappa.sqrt();
-                let pu = Matrix::from_fn(form.joints, 6, |i, j| {
-                    -(0..p).map(|l| pinv[(i, l)] * form.bw[(l, j)]).sum::<f64>() / k
-                });
+                let mut pu = Matrix::zeros(form.joints, 6);
+                for i in 0..form.joints {
+                    let row = pu.row_mut(i);
+                    for (e, b) in pinv.row(i).iter().zip(form.bw.as_slice().chunks_exact(6)) {
+                        for (v, b) in row.iter_mut().zip(b) {
+                            *v += e * b;
+                        }
+                    }
+                    row.iter_mut().for_each(|v| *v = -*v / k);
+                }
                 Equalities {
                     dinv: ld.weights.iter().map(|w| 1.0 / w.sqrt()).collect(),
                     null_basis: nt.transpose(),
