@@ -306,7 +306,11 @@ impl ActiveSetSolver {
         let ld = qp.least_distance();
         let p = ld.eq.nrows();
         let eqs = match (&form.eq_null_t, &form.eq_pinv) {
-            (Some(nt), Some(pinv)) if form.free == 0 && pinv.ncols() == p => {
+            // (κ = 1/k² under- or overflows only at scales no answer survives: then
+            // the decomposition.)
+            (Some(nt), Some(pinv))
+                if form.free == 0 && pinv.ncols() == p && form.kappa.is_normal() =>
+            {
                 // x = (k/α) D^½ τ on the torques (col_scale = k √w), so the form's
                 // particular solution x_p = E⁺ bw_E w / α is u0 = E⁺ bw_E w / k, and
                 // u0 = −pu w.
