@@ -1,12 +1,14 @@
 //! Batch throughput: synthetic grasps (grasp-testkit), each with its model built, solved
-//! for one wrench or six, on one worker thread and on two. Throughput is in grasps per
-//! second; with six wrenches each grasp is six solves.
+//! for one wrench or six, on one worker thread and on two; and with exact cones, one
+//! wrench on one thread (a planner's screening pass, the build of the exact solver
+//! included). Throughput is in grasps per second; with six wrenches each grasp is six
+//! solves.
 //!
 //! Run: `cargo bench -p grasp-torque --bench batch`. Figures are in docs/benchmarks.md.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use grasp_testkit::{synthetic_grasp, ModelMix, SynthSpec};
-use grasp_torque::{file::ModelName, solve_batch, BatchGrasp, BatchOptions, SolverConfig};
+use grasp_torque::{file::ModelName, solve_batch, BatchGrasp, BatchOptions, Cones, SolverConfig};
 use std::hint::black_box;
 
 const GRASPS: usize = 2000;
@@ -52,6 +54,18 @@ fn batch(c: &mut Criterion) {
         let mut g = c.benchmark_group(format!("batch/{name}"));
         g.sample_size(10);
         g.throughput(Throughput::Elements(GRASPS as u64));
+        let exact = SolverConfig {
+            cones: Cones::Exact,
+            ..Default::default()
+        };
+        let one = BatchOptions {
+            threads: Some(1),
+            ..Default::default()
+        };
+        let input = grasps(fingers, joints, model, 1);
+        g.bench_function("exact/1-wrench/1-thread", |b| {
+            b.iter(|| black_box(solve_batch(&input, &exact, &one).unwrap()))
+        });
         for wrenches in [1, 6] {
             let input = grasps(fingers, joints, model, wrenches);
             for threads in [1, 2] {
