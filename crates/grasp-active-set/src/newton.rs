@@ -135,6 +135,9 @@ pub(crate) struct Newton {
     a_red: Matrix,
     /// The largest entry of `a_red`.
     a_scale: f64,
+    /// Each row's ℓ1 norm in `a_red`: `|a·dx| ≤ ‖a‖₁ ‖dx‖∞` bounds a slack's change
+    /// without the product.
+    a_red_l1: Vec<f64>,
     /// Rows `eq..` of `a_red` column-major, for the pass over every slack.
     a_red_cols: Vec<f64>,
     /// `b − A x_p` and `x_p` are affine in the wrench, like b: their constant and
@@ -261,6 +264,9 @@ impl Newton {
             null_basis,
             a_red_cols,
             a_scale: a_red.max_abs(),
+            a_red_l1: (0..rows)
+                .map(|i| a_red.row(i).iter().map(|v| v.abs()).sum())
+                .collect(),
             a_red,
             b_red: vec![0.0; rows],
             xp: vec![0.0; form.nx],
@@ -895,6 +901,60 @@ impl Newton {
         1e-10 * norm_inf(&self.y).max(1.0)
     }
 
+    /// A step along `dx` short enough that no boundary cone's slack crosses its apex
+    /// (into −K): halved until `s0 + ‖s1‖`, the slack's distance from −K along the
+    /// axis, keeps a tenth of its value at y. A force on its boundary near the apex,
+    /// approached from a start farther out, is otherwise overshot, declared at the
+    /// apex, found not to be, and the guess cycles. A cone whose optimum is its apex
+    /// still reaches it (the distance shrinks tenfold a step at most). 1 when no
+    /// full step crosses.
+    fn apex_limit(&self) -> f64 {
+        let n = self.n;
+        let dx = norm_inf(&self.dx);
+        let mut limit = 1.0f64;
+        for (k, &(start, dim)) in self.socs.iter().enumerate() {
+            if self.piece[k] != Piece::Boundary || self.tangent[k] {
+                continue;
+            }
+            let now = &self.s[start..start + dim];
+            let dist = now[0] + soc_norm(&now[1..]);
+            // (A head that keeps a tenth of the distance whatever the step clears it:
+            // the tail's norm only adds.)
+            if dist.is_nan() || dist <= 0.0 || now[0] - self.a_red_l1[start] * dx >= 0.1 * dist {
+                continue;
+            }
+            let ds_row = |j: usize| {
+                -dot4(
+                    &self.a_red.as_slice()[(start + j) * n..(start + j + 1) * n],
+                    &self.dx,
+                )
+            };
+            // The head alone keeping a tenth clears it (the tail's norm only adds).
+            let ds0 = ds_row(0);
+            if now[0] + limit * ds0 >= 0.1 * dist {
+                continue;
+            }
+            let mut ds = [0.0; MAX_TAIL + 1];
+            ds[0] = ds0;
+            for (j, d) in ds[..dim].iter_mut().enumerate().skip(1) {
+                *d = ds_row(j);
+            }
+            let at = |a: f64| {
+                let mut e = [0.0; MAX_TAIL + 1];
+                for ((e, s), d) in e[..dim].iter_mut().zip(now).zip(&ds) {
+                    *e = s + a * d;
+                }
+                e[0] + soc_norm(&e[1..dim])
+            };
+            let mut a = limit;
+            while a > 1e-3 && at(a) < 0.1 * dist {
+                a *= 0.5;
+            }
+            limit = a;
+        }
+        limit
+    }
+
     /// The largest violation of an inactive piece at the current slacks.
     fn worst_inactive(&self) -> f64 {
         let mut worst = 0.0f64;
@@ -1331,6 +1391,9 @@ impl Newton {
                     break;
                 }
                 alpha *= 0.5;
+            }
+            if !still {
+                alpha = alpha.min(self.apex_limit());
             }
             for r in 0..nc {
                 let old = match self.owner[r] {

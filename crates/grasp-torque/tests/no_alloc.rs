@@ -66,16 +66,18 @@ fn solves_reuse_the_workspace(cones: Cones) {
     // With exact cones, grasps whose optimum holds a cone at its apex too (Newton's
     // apex rows and their basis use the solver's buffers), one whose guess swaps a
     // dependent piece (1252), one whose full steps need the second-order correction
-    // (10045), one that Newton solves from the circumscribed optimum (10590) and one
-    // that only the interior-point method solves cold, whose warm re-solves start
-    // Newton from its answer (1782).
+    // (10045), one that Newton solves from the circumscribed optimum (10590), one whose
+    // Newton steps stop short of a cone's apex (1203) and one that only the
+    // interior-point method solves cold, whose warm re-solves start Newton from its
+    // answer (10028).
     let apex = [
         (10543, 0.25),
         (337, 1.0),
         (1252, 1.0),
         (10045, 0.25),
         (10590, 0.25),
-        (1782, 1.0),
+        (1203, 1.0),
+        (10028, 0.25),
     ]
     .map(|(seed, friction)| {
         (
