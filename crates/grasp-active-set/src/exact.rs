@@ -52,6 +52,8 @@ pub struct ExactSolver {
     conic: ConicForm,
     /// Built at the grasp's first fallback, then kept (as [`Self::outer`]).
     ipm: Option<Ipm>,
+    /// Its last answer in the form's variables.
+    ipm_x: Vec<f64>,
     /// The view with every exact cone inscribed, and its rows' meaning here: the conic
     /// row of a row both views share, and the (contact, SFCl group) of an inscribed face.
     inner: ActiveSetSolver,
@@ -191,6 +193,7 @@ impl ExactSolver {
         let rows = conic.rows();
         Ok(Self {
             ipm: None,
+            ipm_x: Vec::new(),
             inner,
             inner_row,
             inner_face,
@@ -447,20 +450,38 @@ impl TorqueSolver for ExactSolver {
         // grasp infeasible as soon as they show one, several iterations before the
         // method, growing them along it, stalls.
         let mut ray = None;
-        let ipm = self
-            .ipm
-            .get_or_insert_with(|| Ipm::new(&self.conic, IpmSettings::default()));
+        let (conic, newton) = (&self.conic, &mut self.newton);
+        let ipm = self.ipm.get_or_insert_with(|| {
+            // On the null space of the equalities where Newton eliminated them: about
+            // half the variables on a hand, and no Schur complement.
+            let settings = IpmSettings::default();
+            match newton.reduced_rows(conic) {
+                Some(g) => Ipm::reduced(conic, g, settings),
+                None => Ipm::new(conic, settings),
+            }
+        });
         let end = {
-            let (conic, b, dual, scratch) =
-                (&self.conic, &self.b, &mut self.dual, &mut self.scratch);
-            let xp = self.newton.particular(w, alpha);
-            ipm.solve(conic, b, &mut |ipm| {
+            let (b, dual, scratch) = (&self.b, &mut self.dual, &mut self.scratch);
+            let (xp, rhs) = if ipm.is_reduced() {
+                let (xp, rhs) = newton.reduced_rhs(w, alpha);
+                (Some(xp), rhs)
+            } else {
+                (newton.particular(w, alpha), b.as_slice())
+            };
+            ipm.solve(conic, rhs, &mut |ipm| {
                 if let Some(xp) = xp {
                     ray = ray_of(ipm, conic, b, xp, dual, scratch);
                 }
                 ray.is_some()
             })
         };
+        // The answer in the form's variables.
+        self.ipm_x.resize(conic.nx, 0.0);
+        if ipm.is_reduced() {
+            newton.lift(&ipm.x, &mut self.ipm_x);
+        } else {
+            self.ipm_x.copy_from_slice(&ipm.x[..conic.nx]);
+        }
         out.iterations += ipm.iterations;
         out.method = Some("interior_point");
         if let Some(reason) = ray {
@@ -470,18 +491,26 @@ impl TorqueSolver for ExactSolver {
             ipm.dual_into(&self.conic, &mut self.dual);
             self.certificate = self.conic.certificate(
                 &self.b,
-                &ipm.x,
+                &self.ipm_x,
                 &self.dual,
                 CERTIFICATE_TOLERANCE,
                 &mut self.scratch,
             );
             if self.certificate.passed {
                 out.status = Status::Optimal;
-                self.conic
-                    .unscale_into(&ipm.x, alpha, &mut out.torque, &mut out.internal_forces);
+                self.conic.unscale_into(
+                    &self.ipm_x,
+                    alpha,
+                    &mut out.torque,
+                    &mut out.internal_forces,
+                );
                 // A warm solve starts Newton from this answer: near it, Newton often
                 // converges where it did not from the polyhedra.
-                if self.adopt && self.newton.adopt(&self.conic, &ipm.x, &self.dual, w, alpha) {
+                if self.adopt
+                    && self
+                        .newton
+                        .adopt(&self.conic, &self.ipm_x, &self.dual, w, alpha)
+                {
                     self.hot = Some(alpha);
                     self.adopted = true;
                 }
@@ -604,6 +633,57 @@ mod tests {
             checked += 1;
         }
         assert!(checked >= 30, "only {checked} reference grasps checked");
+    }
+
+    /// The interior-point method on the null space of the equalities reaches the
+    /// optimum it reaches on the form itself, both answers certified from scratch: on
+    /// the reference grasps and on three grasps of the robustness sweep that fall back
+    /// to it.
+    #[test]
+    fn the_reduced_interior_point_method_finds_the_full_ones_optimum() {
+        let sweep = [(1541, 1.0), (1439, 1.0), (10376, 0.25)]
+            .map(|(seed, friction)| grasp_testkit::sweep_grasp(seed, friction));
+        let cases = grasp_testkit::reference_cases();
+        let problems = cases
+            .iter()
+            .map(|case| grasp_testkit::reference_problem(&case["problem"]))
+            .chain(sweep);
+        let (mut checked, mut worst) = (0, 0.0f64);
+        for p in problems {
+            let model = Arc::new(GraspModel::new(&p, &ModelOptions::default()).unwrap());
+            let mut s = ExactSolver::new(TorqueQp::exact(model), Default::default()).unwrap();
+            let alpha = s.conic.b_into(&p.wrench, &mut s.b);
+            let Some(g) = s.newton.reduced_rows(&s.conic) else {
+                continue;
+            };
+            let mut full = Ipm::new(&s.conic, IpmSettings::default());
+            if alpha == 0.0 || full.solve(&s.conic, &s.b, &mut |_| false) != IpmEnd::Converged {
+                continue;
+            }
+            let mut reduced = Ipm::reduced(&s.conic, g, IpmSettings::default());
+            let rhs = s.newton.reduced_rhs(&p.wrench, alpha).1.to_vec();
+            let end = reduced.solve(&s.conic, &rhs, &mut |_| false);
+            assert_eq!(end, IpmEnd::Converged);
+            let mut x = vec![0.0; s.conic.nx];
+            s.newton.lift(&reduced.x, &mut x);
+            let (mut z, mut scratch) = (vec![0.0; s.conic.rows()], Vec::new());
+            for (x, ipm) in [(&full.x[..], &full), (&x[..], &reduced)] {
+                ipm.dual_into(&s.conic, &mut z);
+                let c = s
+                    .conic
+                    .certificate(&s.b, x, &z, CERTIFICATE_TOLERANCE, &mut scratch);
+                assert!(c.passed, "reduced {}: {c:?}", ipm.is_reduced());
+            }
+            // Two answers each within the certificate's gap of the optimum.
+            let sigma = |x: &[f64]| x[..s.conic.joints].iter().map(|v| v * v).sum::<f64>();
+            let (a, b) = (sigma(&full.x), sigma(&x));
+            let r = (a - b).abs() / a.max(b).max(1.0);
+            assert!(r <= 2.0 * CERTIFICATE_TOLERANCE, "σ {a} against {b}");
+            worst = worst.max(r);
+            checked += 1;
+        }
+        eprintln!("{checked} grasps, worst σ difference {worst:.1e}");
+        assert!(checked >= 30, "only {checked} grasps checked");
     }
 
     /// The Newton answers of the reference grasps pass the certificate, and the same

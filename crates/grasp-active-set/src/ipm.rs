@@ -7,7 +7,10 @@
 //! predictor–corrector, and the reduced system `(P + Gᵀ W⁻² G) dx + Eᵀ dy = r`, solved
 //! by a dense Cholesky factor and the Schur complement of the few equalities. Problems
 //! here have tens of variables and rows, so dense kernels beat any sparse machinery.
-//! Every buffer is allocated when the solver is built.
+//! Every buffer is allocated when the solver is built. Where Newton's method has
+//! eliminated the equalities (`x = x_p + N y`), the method runs on `y` instead
+//! ([`Ipm::reduced`]): about half the variables on a hand, no equalities. Its
+//! directions are refined only while their equations miss by more than rounding.
 //!
 //! It is the fallback of the exact-cone solver, used when the active-set Newton path
 //! does not end with a certificate; infeasibility is decided before it runs (the
@@ -20,8 +23,14 @@ use grasp_core::{ConeKind, ConicForm, Matrix};
 /// Largest second-order cone handled (the exact friction cones have 3 or 4 rows).
 pub(crate) const SOC_MAX: usize = 8;
 
-/// Steps of iterative refinement per search direction.
+/// Steps of iterative refinement per search direction, at most.
 const REFINEMENT_STEPS: usize = 3;
+
+/// A direction whose block equations hold to this, relative to their right-hand
+/// side, is not refined: a correction would change it by rounding (64 ε). Early
+/// iterations' directions start there; the last ones, with W⁻² spread over many
+/// orders of magnitude, do not.
+const REFINEMENT_TOLERANCE: f64 = 64.0 * f64::EPSILON;
 
 /// How a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -95,6 +104,9 @@ pub(crate) struct Ipm {
     pub(crate) z: Vec<f64>,
     pub(crate) s: Vec<f64>,
     pub(crate) iterations: usize,
+    /// Whether the variables are `y` of `x = x_p + N y` (the equalities eliminated, no
+    /// rows of the zero cone), not the form's x.
+    reduced: bool,
     ws: Work,
 }
 
@@ -145,9 +157,27 @@ struct Work {
 impl Ipm {
     /// The solver of `form` (rows of the zero cone become equalities).
     pub(crate) fn new(form: &ConicForm, settings: IpmSettings) -> Self {
-        let n = form.nx;
+        Self::with_rows(form, None, settings)
+    }
+
+    /// The solver of `form` with its equalities eliminated, `x = x_p + N y` (N
+    /// orthonormal, `x_p` orthogonal to it): on `y`, minimise `‖y‖²` subject to
+    /// `(b − A x_p) − (A N) y ∈ K` on the inequality rows, whose `A N` is `g`. Without
+    /// free internal forces `½ xᵀPx = ‖x‖²`, which is `‖y‖²` plus a constant. Fewer
+    /// variables (the null space's dimension, about half the form's on a hand) and no
+    /// Schur complement: each iteration's `Gᵀ W⁻² G` and factor cost a fraction.
+    /// [`Self::solve`] then takes `b − A x_p` in the form's row order.
+    pub(crate) fn reduced(form: &ConicForm, g: Matrix, settings: IpmSettings) -> Self {
+        Self::with_rows(form, Some(g), settings)
+    }
+
+    fn with_rows(form: &ConicForm, reduced: Option<Matrix>, settings: IpmSettings) -> Self {
+        let n = reduced.as_ref().map_or(form.nx, Matrix::ncols);
         let mut pdiag = vec![0.0; n];
-        pdiag[..form.joints].iter_mut().for_each(|p| *p = 2.0);
+        match reduced {
+            Some(_) => pdiag.iter_mut().for_each(|p| *p = 2.0),
+            None => pdiag[..form.joints].iter_mut().for_each(|p| *p = 2.0),
+        }
         let mut eq_rows = Vec::new();
         let mut in_rows = Vec::new();
         let mut blocks = Vec::new();
@@ -173,8 +203,14 @@ impl Ipm {
             }
             row += dim;
         }
-        let e = Matrix::from_fn(eq_rows.len(), n, |i, j| form.a[(eq_rows[i], j)]);
-        let g = Matrix::from_fn(in_rows.len(), n, |i, j| form.a[(in_rows[i], j)]);
+        let is_reduced = reduced.is_some();
+        let (e, g) = match reduced {
+            Some(g) => (Matrix::zeros(0, n), g),
+            None => (
+                Matrix::from_fn(eq_rows.len(), n, |i, j| form.a[(eq_rows[i], j)]),
+                Matrix::from_fn(in_rows.len(), n, |i, j| form.a[(in_rows[i], j)]),
+            ),
+        };
         let mut single = vec![None; g.nrows()];
         for b in &blocks {
             if let Block::Orthant { start, dim } = *b {
@@ -237,8 +273,14 @@ impl Ipm {
             z: vec![0.0; r],
             s: vec![0.0; r],
             iterations: 0,
+            reduced: is_reduced,
             ws,
         }
+    }
+
+    /// Whether the solver works on `y` of `x = x_p + N y` ([`Self::reduced`]).
+    pub(crate) fn is_reduced(&self) -> bool {
+        self.reduced
     }
 
     /// Splits `b` (in the form's row order) into `b_E` and `h`.
@@ -248,8 +290,10 @@ impl Ipm {
         for cone in &form.cones {
             for i in row..row + cone.dim() {
                 if matches!(cone, ConeKind::Zero(_)) {
-                    self.ws.be[ie] = b[i];
-                    ie += 1;
+                    if !self.reduced {
+                        self.ws.be[ie] = b[i];
+                        ie += 1;
+                    }
                 } else {
                     self.ws.h[ih] = b[i];
                     ih += 1;
@@ -259,15 +303,17 @@ impl Ipm {
         }
     }
 
-    /// The dual variables in the form's row order (equalities' y with the sign of z).
+    /// The dual variables in the form's row order (equalities' y with the sign of z;
+    /// zero when they were eliminated, which the certificate and the dual ray do not
+    /// read).
     pub(crate) fn dual_into(&self, form: &ConicForm, out: &mut [f64]) {
         let (mut ie, mut ih) = (0, 0);
         let mut row = 0;
         for cone in &form.cones {
             for o in &mut out[row..row + cone.dim()] {
                 if matches!(cone, ConeKind::Zero(_)) {
-                    *o = self.y[ie];
-                    ie += 1;
+                    *o = if self.reduced { 0.0 } else { self.y[ie] };
+                    ie += usize::from(!self.reduced);
                 } else {
                     *o = self.z[ih];
                     ih += 1;
@@ -747,6 +793,10 @@ impl Ipm {
         ws.rz0.copy_from_slice(&ws.rz);
         ws.t10[..r].copy_from_slice(&ws.t1[..r]);
         self.direction_once();
+        let size = norm_inf(&self.ws.rx0)
+            .max(norm_inf(&self.ws.ry0))
+            .max(norm_inf(&self.ws.rz0))
+            .max(norm_inf(&self.ws.t10[..r]));
         for _ in 0..REFINEMENT_STEPS {
             let ws = &mut self.ws;
             ws.sdx.copy_from_slice(&ws.dx);
@@ -795,6 +845,13 @@ impl Ipm {
                         }
                     }
                 }
+            }
+            let error = norm_inf(&ws.rx)
+                .max(norm_inf(&ws.ry))
+                .max(norm_inf(&ws.rz))
+                .max(norm_inf(&ws.t1[..r]));
+            if error <= REFINEMENT_TOLERANCE * size {
+                break;
             }
             self.direction_once();
             let ws = &mut self.ws;

@@ -315,6 +315,31 @@ impl Newton {
         })
     }
 
+    /// The inequality rows of `A N` (rows `eq..`): the interior-point method's rows on
+    /// `y`, with `x = x_p + N y` ([`Self::lift`]). None where Newton cannot run (the
+    /// equalities not eliminated, or free internal forces, whose zero curvature leaves
+    /// `Nᵀ P N` no multiple of I).
+    pub(crate) fn reduced_rows(&self, form: &ConicForm) -> Option<Matrix> {
+        (self.null_basis.nrows() == form.nx && form.free == 0).then(|| {
+            Matrix::from_fn(self.a_red.nrows() - self.eq, self.n, |i, j| {
+                self.a_red[(self.eq + i, j)]
+            })
+        })
+    }
+
+    /// `x_p` and `b − A x_p` (its rows `eq..`; the rest unused) for the wrench at
+    /// magnitude α: the reduced problem's right-hand side.
+    pub(crate) fn reduced_rhs(&mut self, w: &[f64; 6], alpha: f64) -> (&[f64], &[f64]) {
+        self.set_wrench(w, alpha);
+        (&self.xp, &self.b_red)
+    }
+
+    /// `x = x_p + N y` into `x`, with `x_p` of the last [`Self::reduced_rhs`].
+    pub(crate) fn lift(&self, y: &[f64], x: &mut [f64]) {
+        x.copy_from_slice(&self.xp);
+        add_columns(x, self.null_basis_t.as_slice(), y, 1.0);
+    }
+
     /// Fills `xp`; returns the weights `[1, w]/α` of the maps' seven columns.
     fn set_particular(&mut self, w: &[f64; 6], alpha: f64) -> [f64; 7] {
         let r = 1.0 / alpha;

@@ -8,10 +8,15 @@
 //! their status. `… -- time SEED:FRICTION...` times each grasp: a cold solve of the
 //! backend alone (200 solves, best of five) and a control loop of `resolve` on a
 //! wrench alternating by 1 % as `grasp-torque bench` does it (100 ticks, best of
-//! three), with the methods the loop's answers came by.
+//! three), with the methods the loop's answers came by. `… -- sweep FROM TO FRICTION`
+//! prints every grasp of seeds `FROM..TO` at that friction: status, method, how an
+//! infeasible one was decided, σ and iterations, one line each, so that two builds'
+//! answers can be compared line by line (`diff`); with `clarabel` after them, Clarabel's.
 
 use grasp_testkit::sweep_grasp;
-use grasp_torque::{solve_into, Cones, GraspSolver, Solution, SolverConfig, WarmStart};
+use grasp_torque::{
+    solve_into, Backend, Cones, GraspSolver, Reason, Solution, SolverConfig, WarmStart,
+};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -67,7 +72,45 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 );
             }
         }
-        _ => return Err("usage: fallbacks list | fallbacks time SEED:FRICTION...".into()),
+        Some("sweep") => {
+            let (config, [from, to, friction]) = match &args[1..] {
+                [a, b, c] => (config, [a, b, c]),
+                [a, b, c, d] if d == "clarabel" => (
+                    SolverConfig {
+                        backend: Some(Backend::Clarabel),
+                        ..config
+                    },
+                    [a, b, c],
+                ),
+                _ => return Err("usage: fallbacks sweep FROM TO FRICTION [clarabel]".into()),
+            };
+            let friction: f64 = friction.parse()?;
+            for seed in from.parse::<u64>()?..to.parse()? {
+                let p = sweep_grasp(seed, friction);
+                let mut s = config.build(config.qp(&p)?)?;
+                let mut out = Solution::default();
+                solve_into(s.as_mut(), &p.wrench, &WarmStart::default(), &mut out)?;
+                let decided = match &out.reason {
+                    Some(Reason::OuterApproximation { sides, .. }) => format!("polyhedra-{sides}"),
+                    Some(Reason::DualRay { .. }) => "dual-ray".into(),
+                    Some(_) => "other".into(),
+                    None => "-".into(),
+                };
+                println!(
+                    "{seed}:{friction} {} {} {decided} {:.15e} {}",
+                    out.status,
+                    out.method.unwrap_or("none"),
+                    out.objective,
+                    out.iterations
+                );
+            }
+        }
+        _ => {
+            return Err(
+                "usage: fallbacks list | time SEED:FRICTION... | sweep FROM TO FRICTION [clarabel]"
+                    .into(),
+            )
+        }
     }
     Ok(())
 }

@@ -172,33 +172,30 @@ fn batch_wrenches_after_the_first_reuse_the_workers_buffers() {
     }
 }
 
-/// A grasp at the edge of feasibility, which only the circumscribed polyhedra at
-/// N = 256 decide (seed 11047 at a quarter of the friction): they are built at its
-/// first solve and kept, so later solves allocate only the infeasible answers' reasons
-/// (boxed causes, lists of blocking rows, messages: 10 allocations), not a polyhedral
-/// solver of a thousand rows again (109 more, as every solve did before).
+/// A grasp at the edge of feasibility that the interior-point method leaves
+/// undecided, so that the circumscribed polyhedra at N = 256 are tried (seed 17551 at
+/// a quarter of the friction, found by a sweep of seeds 16000..70000; they admit a
+/// torque, and it ends `numerical_failure`): they are built at its first solve and
+/// kept, so later solves allocate only the answer's reason (its message), not a
+/// polyhedral solver of a thousand rows again. (The grasps this test used before, which
+/// those polyhedra proved infeasible, are now proved so by a dual ray.)
 #[test]
 fn the_fine_polyhedra_are_built_once() {
-    let p = grasp_testkit::sweep_grasp(11047, 0.25);
+    let p = grasp_testkit::sweep_grasp(17551, 0.25);
     let config = SolverConfig {
         cones: Cones::Exact,
         ..Default::default()
     };
     let mut s = GraspSolver::new(&p, &config).unwrap();
+    let tried_fine = |r: &Option<grasp_torque::Reason>| matches!(r, Some(grasp_torque::Reason::Backend { message, .. }) if message.contains("N = 256"));
     let before = allocations();
     let first = s.solve(&p.wrench, &WarmStart::default()).unwrap();
-    assert!(matches!(
-        first.reason,
-        Some(grasp_torque::Reason::OuterApproximation { sides: 256, .. })
-    ));
+    assert!(tried_fine(&first.reason), "{:?}", first.reason);
     let building = allocations() - before;
     let before = allocations();
     for _ in 0..5 {
         let again = s.solve(&p.wrench, &WarmStart::default()).unwrap();
-        assert!(matches!(
-            again.reason,
-            Some(grasp_torque::Reason::OuterApproximation { sides: 256, .. })
-        ));
+        assert!(tried_fine(&again.reason), "{:?}", again.reason);
     }
     let per_solve = (allocations() - before) / 5;
     assert!(
