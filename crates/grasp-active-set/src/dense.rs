@@ -72,3 +72,115 @@ pub(crate) fn schur(
     }
     rows == 0 || cholesky(&mut s[..rows * rows], rows)
 }
+
+/// The factor `L = Rᵀ` of `AᵀA` from a Householder QR of the row-major `rows × n`
+/// matrix `a` (rows ≥ n; overwritten), in [`cholesky`]'s layout in `l` (row-major
+/// n × n, lower triangle, each diagonal entry stored as its reciprocal): the factor
+/// of a product that is never formed. Each row of R is signed so that its diagonal
+/// is positive. False if a column is (numerically) dependent on those before it.
+pub(crate) fn qr_factor(a: &mut [f64], rows: usize, n: usize, l: &mut [f64]) -> bool {
+    for j in 0..n {
+        let norm2: f64 = (j..rows).map(|i| a[i * n + j] * a[i * n + j]).sum();
+        let norm = norm2.sqrt();
+        if norm.is_nan() || norm == 0.0 || !norm.is_finite() {
+            return false;
+        }
+        // The reflector I − 2vvᵀ/vᵀv with v = x − αe_j, α of the sign opposite to x_j
+        // (no cancellation), stored in column j while the others are reflected.
+        let x0 = a[j * n + j];
+        let alpha = if x0 >= 0.0 { -norm } else { norm };
+        let v0 = x0 - alpha;
+        let vtv = norm2 - x0 * x0 + v0 * v0;
+        a[j * n + j] = v0;
+        for k in j + 1..n {
+            let d: f64 = (j..rows).map(|i| a[i * n + j] * a[i * n + k]).sum();
+            let f = 2.0 * d / vtv;
+            for i in j..rows {
+                a[i * n + k] -= f * a[i * n + j];
+            }
+        }
+        a[j * n + j] = alpha;
+    }
+    for j in 0..n {
+        let sign = if a[j * n + j] < 0.0 { -1.0 } else { 1.0 };
+        l[j * n + j] = 1.0 / (sign * a[j * n + j]);
+        for k in j + 1..n {
+            l[k * n + j] = sign * a[j * n + k];
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn solve(l: &[f64], n: usize, b: &[f64]) -> Vec<f64> {
+        let mut x = b.to_vec();
+        forward(l, n, &mut x);
+        backward(l, n, &mut x);
+        x
+    }
+
+    /// The QR factor of A is the Cholesky factor of the formed AᵀA where that exists,
+    /// and solves with `AᵀA = 2I + t² g gᵀ` where rounding has broken the formed one
+    /// (t = 1e10: the 2I is lost in entries of 1e20), against Sherman–Morrison, to the
+    /// accuracy its condition number allows.
+    #[test]
+    fn the_qr_factor_is_the_cholesky_factor_of_the_product() {
+        let (rows, n) = (7, 4);
+        let a: Vec<f64> = (0..rows * n)
+            .map(|k| ((k * 37 % 11) as f64 - 5.0) / 3.0 + if k % (n + 1) == 0 { 2.0 } else { 0.0 })
+            .collect();
+        let mut m = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                m[i * n + j] = (0..rows).map(|r| a[r * n + i] * a[r * n + j]).sum();
+            }
+        }
+        let mut chol = m.clone();
+        assert!(cholesky(&mut chol, n));
+        let (mut q, mut l) = (a.clone(), vec![0.0; n * n]);
+        assert!(qr_factor(&mut q, rows, n, &mut l));
+        for i in 0..n {
+            for j in 0..=i {
+                let (c, r) = (chol[i * n + j], l[i * n + j]);
+                assert!(
+                    (c - r).abs() <= 1e-13 * (1.0 + c.abs()),
+                    "({i}, {j}): {c} {r}"
+                );
+            }
+        }
+        let g = [0.6, -0.8, 0.3, 0.1];
+        let t = 1e10;
+        let mut formed = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                formed[i * n + j] = t * t * g[i] * g[j] + if i == j { 2.0 } else { 0.0 };
+            }
+        }
+        assert!(
+            !cholesky(&mut formed, n),
+            "the formed matrix kept its factor"
+        );
+        let mut stack = vec![0.0; (n + 1) * n];
+        for j in 0..n {
+            stack[j * n + j] = 2f64.sqrt();
+            stack[n * n + j] = t * g[j];
+        }
+        assert!(qr_factor(&mut stack, n + 1, n, &mut l));
+        let b = [1.0, 2.0, -1.0, 0.5];
+        let x = solve(&l, n, &b);
+        let (gb, gg): (f64, f64) = (
+            g.iter().zip(&b).map(|(g, b)| g * b).sum(),
+            g.iter().map(|g| g * g).sum(),
+        );
+        // Two triangular solves with R, whose condition number is about t‖g‖/√2 (the
+        // formed product's is its square): errors up to a few ε κ(R) of the answer.
+        let tol = 10.0 * f64::EPSILON * t * gg.sqrt() / 2f64.sqrt();
+        for i in 0..n {
+            let want = (b[i] - t * t * g[i] * gb / (2.0 + t * t * gg)) / 2.0;
+            assert!((x[i] - want).abs() <= tol, "{i}: {} against {want}", x[i]);
+        }
+    }
+}

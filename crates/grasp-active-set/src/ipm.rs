@@ -10,13 +10,15 @@
 //! Every buffer is allocated when the solver is built. Where Newton's method has
 //! eliminated the equalities (`x = x_p + N y`), the method runs on `y` instead
 //! ([`Ipm::reduced`]): about half the variables on a hand, no equalities. Its
-//! directions are refined only while their equations miss by more than rounding.
+//! directions are refined only while their equations miss by more than rounding. Where
+//! the formed matrix loses its Cholesky factor to rounding near the end, a QR of
+//! `[√P; W⁻¹G]` gives the factor without forming it ([`Ipm::factor_by_qr`]).
 //!
 //! It is the fallback of the exact-cone solver, used when the active-set Newton path
 //! does not end with a certificate; infeasibility is decided before it runs (the
 //! inscribed and circumscribed polyhedra), so it has no homogeneous embedding.
 
-use crate::dense::{backward, cholesky, forward, schur};
+use crate::dense::{backward, cholesky, forward, qr_factor, schur};
 use grasp_core::matrix::{dot, norm2, norm_inf};
 use grasp_core::{ConeKind, ConicForm, Matrix};
 
@@ -152,6 +154,8 @@ struct Work {
     schur: Vec<f64>,
     /// One block's `W⁻¹ G_i` (d × n).
     wg: Vec<f64>,
+    /// `[√P; W⁻¹ G]` ((n + r) × n), for [`Ipm::factor_by_qr`].
+    stack: Vec<f64>,
 }
 
 impl Ipm {
@@ -258,6 +262,7 @@ impl Ipm {
             y_cols: vec![0.0; n * p],
             schur: vec![0.0; p * p],
             wg: vec![0.0; maxdim * n],
+            stack: vec![0.0; (n + r) * n],
         };
         Self {
             settings,
@@ -680,9 +685,10 @@ impl Ipm {
                 ws.m[j * n + j] += 1e-12;
             }
         }
-        if !cholesky(&mut ws.m, n) {
+        if !cholesky(&mut ws.m, n) && !self.factor_by_qr() {
             return false;
         }
+        let ws = &mut self.ws;
         // Schur complement S = E M⁻¹ Eᵀ = YᵀY with Y = L⁻¹ Eᵀ.
         let p = self.e.nrows();
         schur(
@@ -693,6 +699,57 @@ impl Ipm {
             &mut ws.y_cols,
             &mut ws.schur,
         )
+    }
+
+    /// The factor of `P + Gᵀ W⁻² G` from a QR of `[√P; W⁻¹ G]`, never forming the
+    /// product: near the end W⁻² spans many orders of magnitude, and the formed matrix
+    /// can lose its positive definiteness to rounding (its Cholesky factor then fails,
+    /// although the matrix is at least P in exact arithmetic). The R factor has the
+    /// square root of its condition number. Into `ws.m` in [`cholesky`]'s layout; false
+    /// if the QR breaks down too.
+    fn factor_by_qr(&mut self) -> bool {
+        let n = self.n;
+        let ws = &mut self.ws;
+        let rows = n + self.g.nrows();
+        let a = &mut ws.stack[..rows * n];
+        a.iter_mut().for_each(|v| *v = 0.0);
+        for j in 0..n {
+            // (Variables without curvature: the same small one as the formed matrix.)
+            let p = if self.pdiag[j] == 0.0 {
+                1e-12
+            } else {
+                self.pdiag[j]
+            };
+            a[j * n + j] = p.sqrt();
+        }
+        for (bi, blk) in self.blocks.iter().enumerate() {
+            let (start, dim) = blk.range();
+            let rows = &mut a[(n + start) * n..(n + start + dim) * n];
+            match blk {
+                Block::Orthant { .. } => {
+                    for (i, row) in rows.chunks_exact_mut(n).enumerate() {
+                        let w = ws.w[start + i];
+                        for (r, g) in row.iter_mut().zip(self.g.row(start + i)) {
+                            *r = g / w;
+                        }
+                    }
+                }
+                Block::Soc { .. } => {
+                    let w = &ws.w[start..start + dim];
+                    let (mut col, mut out) = ([0.0; SOC_MAX], [0.0; SOC_MAX]);
+                    for j in 0..n {
+                        for a in 0..dim {
+                            col[a] = self.g[(start + a, j)];
+                        }
+                        apply_winv(w, ws.eta[bi], &col[..dim], &mut out[..dim]);
+                        for a in 0..dim {
+                            rows[a * n + j] = out[a];
+                        }
+                    }
+                }
+            }
+        }
+        qr_factor(a, rows, n, &mut ws.m)
     }
 
     /// The search direction for the current residuals and `d_s` in `t1`:
