@@ -10,8 +10,11 @@
 //! wrench alternating by 1 % as `grasp-torque bench` does it (100 ticks, best of
 //! three), with the methods the loop's answers came by. `… -- sweep FROM TO FRICTION`
 //! prints every grasp of seeds `FROM..TO` at that friction: status, method, how an
-//! infeasible one was decided, σ and iterations, one line each, so that two builds'
-//! answers can be compared line by line (`diff`); with `clarabel` after them, Clarabel's.
+//! infeasible one was decided, σ, iterations, the least friction margin (scale-free,
+//! negative outside a cone) and the largest violation of a linear row (force or torque
+//! units), one line each, so that two builds' answers can be compared line by line
+//! (`diff`); with `clarabel` after them, Clarabel's; with `sides=N`, the native
+//! linearised solve at N.
 
 use grasp_testkit::sweep_grasp;
 use grasp_torque::{
@@ -73,20 +76,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         Some("sweep") => {
-            let (config, [from, to, friction]) = match &args[1..] {
-                [a, b, c] => (config, [a, b, c]),
+            let usage = "usage: fallbacks sweep FROM TO FRICTION [clarabel | sides=N]";
+            let (config, sides, [from, to, friction]) = match &args[1..] {
+                [a, b, c] => (config, None, [a, b, c]),
                 [a, b, c, d] if d == "clarabel" => (
                     SolverConfig {
                         backend: Some(Backend::Clarabel),
                         ..config
                     },
+                    None,
                     [a, b, c],
                 ),
-                _ => return Err("usage: fallbacks sweep FROM TO FRICTION [clarabel]".into()),
+                [a, b, c, d] => {
+                    let n: usize = d.strip_prefix("sides=").ok_or(usage)?.parse()?;
+                    let linear = SolverConfig {
+                        cones: Cones::Linear,
+                        ..config
+                    };
+                    (linear, Some(n), [a, b, c])
+                }
+                _ => return Err(usage.into()),
             };
             let friction: f64 = friction.parse()?;
             for seed in from.parse::<u64>()?..to.parse()? {
-                let p = sweep_grasp(seed, friction);
+                let mut p = sweep_grasp(seed, friction);
+                if let Some(n) = sides {
+                    p.linearization.sides = n;
+                }
                 let mut s = config.build(config.qp(&p)?)?;
                 let mut out = Solution::default();
                 solve_into(s.as_mut(), &p.wrench, &WarmStart::default(), &mut out)?;
@@ -96,18 +112,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     Some(_) => "other".into(),
                     None => "-".into(),
                 };
+                let d = &out.diagnostics;
+                let margin = d.friction_margins.iter().flatten().fold(1.0f64, |a, m| a.min(*m));
                 println!(
-                    "{seed}:{friction} {} {} {decided} {:.15e} {}",
+                    "{seed}:{friction} {} {} {decided} {:.15e} {} {margin:.2e} {:.2e}",
                     out.status,
                     out.method.unwrap_or("none"),
                     out.objective,
-                    out.iterations
+                    out.iterations,
+                    d.max_violation,
                 );
             }
         }
         _ => {
             return Err(
-                "usage: fallbacks list | time SEED:FRICTION... | sweep FROM TO FRICTION [clarabel]"
+                "usage: fallbacks list | time SEED:FRICTION... | sweep FROM TO FRICTION [clarabel | sides=N]"
                     .into(),
             )
         }
