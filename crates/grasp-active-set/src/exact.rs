@@ -24,7 +24,8 @@
 //!    polyhedra (`N = 256`, within 8e-5 of the cones).
 //!
 //! A warm solve (`GraspSolver::resolve`) starts Newton from the previous answer and its
-//! pieces, without the inscribed solve.
+//! pieces, without the inscribed solve; if that fails, Newton follows the wrenches
+//! between the two in steps ([`ExactSolver::follow`]) before the cold path.
 
 use crate::ipm::{Ipm, IpmEnd, IpmSettings};
 use crate::newton::{Newton, Piece};
@@ -45,6 +46,10 @@ const PROOF_SIDES: usize = 8;
 /// not converge on a grasp the coarse proofs left undecided.
 const FINE_SIDES: usize = 256;
 
+/// Newton solves, at most, on the way from the last answer's wrench to a new one
+/// ([`ExactSolver::follow`]).
+const MAX_FOLLOW: usize = 8;
+
 /// The native solver of a view with exact cones.
 #[derive(Clone, Debug)]
 pub struct ExactSolver {
@@ -64,8 +69,23 @@ pub struct ExactSolver {
     /// Each second-order cone's (contact, group).
     soc_group: Vec<(usize, usize)>,
     newton: Newton,
-    /// Whether `newton` holds the last answer (for a warm solve), at magnitude α.
+    /// Whether `newton` holds the last answer (for a warm solve), at magnitude α, and
+    /// the wrench it answers.
     hot: Option<f64>,
+    hot_wrench: [f64; 6],
+    /// That answer's primal-dual pair in the form (at magnitude α), for
+    /// [`Self::follow`]: a warm solve from it that converges and fails its certificate
+    /// leaves Newton's own elsewhere.
+    answer_x: Vec<f64>,
+    answer_z: Vec<f64>,
+    /// The first step of the next [`Self::follow`], as a fraction of the way: that of
+    /// the last one's first solve that converged (doubled if it was its first
+    /// try), so that a control loop that needs short steps does not relearn them
+    /// every tick.
+    follow_step: f64,
+    /// Whether the last follow failed: the next warm solve that fails goes on cold
+    /// without one (a grasp where following fails every tick pays for every other).
+    follow_failed: bool,
     /// Whether that answer is the interior-point method's ([`Newton::adopt`]), and
     /// whether the method's answers are taken up: not after a warm solve from one has
     /// failed, until Newton solves a grasp again.
@@ -201,6 +221,11 @@ impl ExactSolver {
             soc_group,
             newton,
             hot: None,
+            hot_wrench: [0.0; 6],
+            answer_x: vec![0.0; conic.nx],
+            answer_z: vec![0.0; rows],
+            follow_step: 0.5,
+            follow_failed: false,
             adopted: false,
             adopt: true,
             outer: None,
@@ -329,28 +354,105 @@ impl ExactSolver {
         let ok = self.newton.solve(&self.conic, w, alpha, hot);
         out.iterations += self.newton.iterations;
         if ok {
-            self.certificate = self.conic.certificate(
-                &self.b,
-                &self.newton.x,
-                &self.newton.z,
-                CERTIFICATE_TOLERANCE,
-                &mut self.scratch,
-            );
-            if self.certificate.passed {
-                out.status = Status::Optimal;
-                out.method = Some("newton");
-                self.conic.unscale_into(
-                    &self.newton.x,
-                    alpha,
-                    &mut out.torque,
-                    &mut out.internal_forces,
-                );
-                self.hot = Some(alpha);
-                (self.adopted, self.adopt) = (false, true);
-                return true;
-            }
+            return self.certify(w, alpha, out);
         }
         self.hot = None;
+        false
+    }
+
+    /// Checks Newton's converged answer from scratch; if it passes, fills `out` and
+    /// keeps the answer for a warm solve.
+    fn certify(&mut self, w: &[f64; 6], alpha: f64, out: &mut Solution) -> bool {
+        self.certificate = self.conic.certificate(
+            &self.b,
+            &self.newton.x,
+            &self.newton.z,
+            CERTIFICATE_TOLERANCE,
+            &mut self.scratch,
+        );
+        if !self.certificate.passed {
+            self.hot = None;
+            return false;
+        }
+        out.status = Status::Optimal;
+        out.method = Some("newton");
+        self.conic.unscale_into(
+            &self.newton.x,
+            alpha,
+            &mut out.torque,
+            &mut out.internal_forces,
+        );
+        (self.hot, self.hot_wrench) = (Some(alpha), *w);
+        self.keep_answer();
+        (self.adopted, self.adopt) = (false, true);
+        true
+    }
+
+    /// Keeps Newton's answer in `answer_x` and `answer_z` by swapping buffers, not
+    /// copying (a control loop pays this every tick): Newton writes its x and z afresh
+    /// before it reads them again.
+    fn keep_answer(&mut self) {
+        std::mem::swap(&mut self.answer_x, &mut self.newton.x);
+        std::mem::swap(&mut self.answer_z, &mut self.newton.z);
+    }
+
+    /// Newton along the wrenches from the last answer's (at magnitude `prev`) to `w`,
+    /// when a warm solve straight to `w` failed: each solve
+    /// starts from the answer one step back, and a failed step is halved. Newton's
+    /// model of a cone's boundary holds over a distance about that of the force from
+    /// the apex, so a force on its boundary near the apex, which a 1 % change of the
+    /// wrench moves by more than that, is otherwise lost to the interior-point method
+    /// at every tick of a control loop. Only the answer at `w` is certified; on
+    /// failure `b` is `w`'s again.
+    fn follow(&mut self, w: &[f64; 6], prev: f64, out: &mut Solution) -> bool {
+        let from = self.hot_wrench;
+        let (mut reached, mut step) = (0.0f64, self.follow_step);
+        // The answer reached (its wrench and magnitude; its pair in `answer_x`,
+        // `answer_z`), and whether Newton's state has left it.
+        let (mut wr, mut ar, mut left) = (from, prev, true);
+        for attempt in 0..MAX_FOLLOW {
+            if left {
+                self.newton
+                    .adopt(&self.conic, &self.answer_x, &self.answer_z, &wr, ar);
+            }
+            let t = (reached + step).min(1.0);
+            let wt: [f64; 6] = if t == 1.0 {
+                *w
+            } else {
+                std::array::from_fn(|i| from[i] + t * (w[i] - from[i]))
+            };
+            let at = self.conic.b_into(&wt, &mut self.b);
+            if at == 0.0 {
+                break;
+            }
+            self.newton.rescale(ar / at);
+            let ok = self.newton.solve(&self.conic, &wt, at, true);
+            out.iterations += self.newton.iterations;
+            if ok && t == 1.0 {
+                return self.certify(w, at, out);
+            }
+            if ok {
+                if reached == 0.0 {
+                    self.follow_step = if attempt == 0 {
+                        (2.0 * step).min(0.5)
+                    } else {
+                        step
+                    };
+                }
+                (reached, wr, ar, left, step) = (t, wt, at, false, 2.0 * step);
+                self.keep_answer();
+            } else {
+                // Two failures in a row past the start: the pieces change between
+                // here and there in a way Newton cannot follow (a contact leaving its
+                // apex, say), and shorter steps only close in on it.
+                if left && reached > 0.0 {
+                    break;
+                }
+                left = true;
+                step *= 0.5;
+            }
+        }
+        self.conic.b_into(w, &mut self.b);
         false
     }
 
@@ -411,6 +513,12 @@ impl TorqueSolver for ExactSolver {
             self.newton.rescale(prev / alpha);
             if self.try_newton(w, alpha, true, out) {
                 return;
+            }
+            if !std::mem::take(&mut self.follow_failed) {
+                if self.follow(w, prev, out) {
+                    return;
+                }
+                self.follow_failed = true;
             }
             self.adopt &= !self.adopted;
         }
@@ -511,7 +619,9 @@ impl TorqueSolver for ExactSolver {
                         .newton
                         .adopt(&self.conic, &self.ipm_x, &self.dual, w, alpha)
                 {
-                    self.hot = Some(alpha);
+                    (self.hot, self.hot_wrench) = (Some(alpha), *w);
+                    self.answer_x.copy_from_slice(&self.ipm_x);
+                    self.answer_z.copy_from_slice(&self.dual);
                     self.adopted = true;
                 }
                 return;
@@ -700,7 +810,7 @@ mod tests {
             if out.method != Some("newton") {
                 continue;
             }
-            let (x, z) = (s.newton.x.clone(), s.newton.z.clone());
+            let (x, z) = (s.answer_x.clone(), s.answer_z.clone());
             let mut scratch = Vec::new();
             let check = |x: &[f64], z: &[f64], scratch: &mut Vec<f64>| {
                 s.conic

@@ -14,7 +14,11 @@
 //! negative outside a cone) and the largest violation of a linear row (force or torque
 //! units), one line each, so that two builds' answers can be compared line by line
 //! (`diff`); with `clarabel` after them, Clarabel's; with `sides=N`, the native
-//! linearised solve at N.
+//! linearised solve at N. `… -- ticks FROM TO FRICTION [CHANGE]` runs six ticks of a
+//! control loop per grasp (`resolve`, the wrench alternating with the one CHANGE
+//! away, 0.01 by default, as `grasp-torque bench` nudges it) and prints each tick's
+//! status, method and σ; `… -- loop SEED:FRICTION N` runs N such ticks silently, for
+//! instruction counts (valgrind).
 
 use grasp_testkit::sweep_grasp;
 use grasp_torque::{
@@ -54,10 +58,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let cold = best_of(5, 200, || {
                     solve_into(s.as_mut(), &p.wrench, &WarmStart::default(), &mut out).map(|_| ())
                 })?;
-                let (w0, w1) = (
-                    p.wrench,
-                    std::array::from_fn(|i| p.wrench[i] * if i < 3 { 1.01 } else { 0.99 }),
-                );
+                let (w0, w1) = (p.wrench, nudged(&p.wrench, 0.01));
                 let mut ctl = GraspSolver::new(&p, &config)?;
                 ctl.resolve(&w0)?;
                 let mut methods = BTreeMap::new();
@@ -124,14 +125,53 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 );
             }
         }
+        Some("ticks") => {
+            let [from, to, friction, rest @ ..] = &args[1..] else {
+                return Err("usage: fallbacks ticks FROM TO FRICTION [CHANGE]".into());
+            };
+            let friction: f64 = friction.parse()?;
+            let change: f64 = rest.first().map_or(Ok(0.01), |c| c.parse())?;
+            for seed in from.parse::<u64>()?..to.parse()? {
+                let p = sweep_grasp(seed, friction);
+                let w = [p.wrench, nudged(&p.wrench, change)];
+                let mut ctl = GraspSolver::new(&p, &config)?;
+                let mut line = format!("{seed}:{friction}");
+                for tick in 0..6 {
+                    let r = ctl.resolve(&w[tick % 2])?;
+                    let method = r.method.unwrap_or("none");
+                    line += &format!(" {}/{method}/{:.10e}", r.status, r.objective);
+                }
+                println!("{line}");
+            }
+        }
+        Some("loop") => {
+            let [grasp, n] = &args[1..] else {
+                return Err("usage: fallbacks loop SEED:FRICTION N".into());
+            };
+            let (seed, friction) = grasp
+                .split_once(':')
+                .ok_or_else(|| format!("{grasp}: expected SEED:FRICTION"))?;
+            let p = sweep_grasp(seed.parse()?, friction.parse()?);
+            let w = [p.wrench, nudged(&p.wrench, 0.01)];
+            let mut ctl = GraspSolver::new(&p, &config)?;
+            for tick in 0..n.parse::<usize>()? {
+                std::hint::black_box(ctl.resolve(&w[tick % 2])?.status);
+            }
+        }
         _ => {
             return Err(
-                "usage: fallbacks list | time SEED:FRICTION... | sweep FROM TO FRICTION [clarabel | sides=N]"
+                "usage: fallbacks list | time SEED:FRICTION... | sweep FROM TO FRICTION [clarabel | sides=N] | ticks FROM TO FRICTION [CHANGE] | loop SEED:FRICTION N"
                     .into(),
             )
         }
     }
     Ok(())
+}
+
+/// The wrench `change` away, as `grasp-torque bench` nudges it: forces up, moments
+/// down (a uniform scale would leave the scaled exact problem unchanged).
+fn nudged(w: &[f64; 6], change: f64) -> [f64; 6] {
+    std::array::from_fn(|i| w[i] * if i < 3 { 1.0 + change } else { 1.0 - change })
 }
 
 /// The lowest over `rounds` of the mean time of `n` calls, in µs.

@@ -442,6 +442,53 @@ fn a_control_loop_starts_newton_from_the_interior_point_answer() {
     }
 }
 
+/// Grasps with a force on its boundary near the apex, where a 1 % change of the wrench
+/// moves the force by more than Newton's model of the cone holds: the warm solve
+/// straight from the last answer fails, and before the follow every tick of a control
+/// loop went to the interior-point method (120–500 µs a tick, docs/benchmarks.md,
+/// "Following the wrench"). Newton now follows the wrench from the last answer in
+/// steps: every tick after the first is by Newton and gives the cold answer, which the
+/// interior-point method finds. Both are certified to 1e-9 of the gap, so the
+/// objectives agree to twice that.
+#[test]
+fn a_control_loop_follows_the_wrench_where_newton_loses_a_force_near_the_apex() {
+    for (seed, friction) in [
+        (1541, 1.0),
+        (10376, 0.25),
+        (11901, 0.25),
+        (12509, 0.25),
+        (12678, 0.25),
+    ] {
+        let p = grasp(seed, friction);
+        let mut ctl = GraspSolver::new(&p, &exact_config()).unwrap();
+        let mut cold = GraspSolver::new(&p, &exact_config()).unwrap();
+        assert_eq!(
+            ctl.resolve(&p.wrench).unwrap().method,
+            Some("interior_point"),
+            "seed {seed}"
+        );
+        // As `grasp-torque bench` nudges the wrench: forces up, moments down.
+        let near: [f64; 6] = std::array::from_fn(|i| p.wrench[i] * if i < 3 { 1.01 } else { 0.99 });
+        for k in 0..6 {
+            let w = if k % 2 == 0 { near } else { p.wrench };
+            let warm = ctl.resolve(&w).unwrap().clone();
+            let fresh = cold.solve(&w, &WarmStart::default()).unwrap();
+            assert!(
+                warm.is_optimal() && fresh.is_optimal(),
+                "seed {seed} tick {k}"
+            );
+            assert_eq!(warm.method, Some("newton"), "seed {seed} tick {k}");
+            assert_eq!(fresh.method, Some("interior_point"), "seed {seed} tick {k}");
+            assert!(
+                rel(warm.objective, fresh.objective) < 2e-9,
+                "seed {seed} tick {k}: {} vs {}",
+                warm.objective,
+                fresh.objective
+            );
+        }
+    }
+}
+
 /// A control loop of warm re-solves (the hot path: chord iterations on the kept Newton
 /// factors) gives the cold answers, on every bundled fixture, without Clarabel.
 #[test]

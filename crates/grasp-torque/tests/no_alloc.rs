@@ -203,3 +203,29 @@ fn the_fine_polyhedra_are_built_once() {
         "{per_solve} allocations per solve, {building} the first"
     );
 }
+
+/// A control loop whose warm solves follow the wrench in steps (seed 1439: from the
+/// wrench to the one 1 % away the warm solve straight there fails, and Newton follows
+/// the segment in steps; back, it converges straight away): the steps' state is kept
+/// in the solver's buffers, so no tick allocates.
+#[test]
+fn following_the_wrench_reuses_the_workspace() {
+    let p = grasp_testkit::sweep_grasp(1439, 1.0);
+    let config = SolverConfig {
+        cones: Cones::Exact,
+        ..Default::default()
+    };
+    let mut s = GraspSolver::new(&p, &config).unwrap();
+    let near: [f64; 6] = std::array::from_fn(|i| p.wrench[i] * if i < 3 { 1.01 } else { 0.99 });
+    // Warm up: the interior-point answer, then the first follow.
+    for w in [p.wrench, near, p.wrench] {
+        assert!(s.resolve(&w).unwrap().is_optimal());
+    }
+    let before = allocations();
+    for k in 0..10 {
+        let w = if k % 2 == 0 { near } else { p.wrench };
+        let out = s.resolve(&w).unwrap();
+        assert!(out.is_optimal() && out.method == Some("newton"), "tick {k}");
+    }
+    assert_eq!(allocations() - before, 0, "a tick allocated");
+}
