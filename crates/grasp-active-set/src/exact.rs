@@ -11,7 +11,10 @@
 //!    there (after an infeasible inscribed problem) is a certificate that the exact
 //!    problem is infeasible; otherwise their optimum, just outside the cones, starts
 //!    Newton the same way, from the other side of each cone's boundary (where a cone
-//!    near its apex sent Newton from the inscribed optimum between apex and boundary);
+//!    near its apex sent Newton from the inscribed optimum between apex and boundary).
+//!    If Newton fails there too, after an infeasible inscribed problem, circumscribed
+//!    polyhedra at `N = 32` (within 0.5 % of the cones) are tried: infeasible, they
+//!    prove the exact problem so;
 //! 3. checks the Newton answer from scratch ([`ConicForm::certificate`]: primal and
 //!    dual cone feasibility, stationarity, complementarity and the duality gap). Only an
 //!    answer that passes is `optimal` (`method: "newton"`);
@@ -42,8 +45,13 @@ pub const CERTIFICATE_TOLERANCE: f64 = 1e-9;
 
 /// Sides of the polygons of the feasibility proofs.
 const PROOF_SIDES: usize = 8;
+/// Sides of the circumscribed polygons tried before the interior-point method on a
+/// grasp the inscribed polyhedra cannot hold and the coarse proof left undecided: within
+/// 0.5 % of the cones, they prove most such grasps infeasible in a tenth of the
+/// method's time (docs/benchmarks.md, "Finer proofs before the interior-point method").
+const MID_SIDES: usize = 32;
 /// Sides of the finer circumscribed polygons tried when the interior-point method does
-/// not converge on a grasp the coarse proofs left undecided.
+/// not converge on a grasp the coarser proofs left undecided.
 const FINE_SIDES: usize = 256;
 
 /// Newton solves, at most, on the way from the last answer's wrench to a new one
@@ -96,7 +104,9 @@ pub struct ExactSolver {
     /// optimum), then kept for the grasp's next solves: most grasps never need it, and a
     /// grasp planner builds a solver per grasp.
     outer: Option<ActiveSetSolver>,
-    /// The same at [`FINE_SIDES`], likewise (at the edge of feasibility).
+    /// The same at [`MID_SIDES`] and [`FINE_SIDES`], likewise (at the edge of
+    /// feasibility).
+    mid: Option<ActiveSetSolver>,
     fine: Option<ActiveSetSolver>,
     settings: ActiveSetSettings,
     lin: Solution,
@@ -229,6 +239,7 @@ impl ExactSolver {
             adopted: false,
             adopt: true,
             outer: None,
+            mid: None,
             fine: None,
             settings,
             lin: Solution::default(),
@@ -250,10 +261,10 @@ impl ExactSolver {
     /// them at the first need; false if they could not be built (their rows are the
     /// inscribed view's, widened, and share its equalities: not expected).
     fn solve_outer(&mut self, w: &[f64; 6], sides: usize) -> bool {
-        let slot = if sides == PROOF_SIDES {
-            &mut self.outer
-        } else {
-            &mut self.fine
+        let slot = match sides {
+            PROOF_SIDES => &mut self.outer,
+            MID_SIDES => &mut self.mid,
+            _ => &mut self.fine,
         };
         if slot.is_none() {
             let lin = Linearization {
@@ -526,6 +537,7 @@ impl TorqueSolver for ExactSolver {
         self.inner
             .solve_raw(w, &WarmStart::default(), &mut self.lin);
         out.iterations += self.lin.iterations;
+        let inscribed_infeasible = self.lin.status == Status::Infeasible;
         let retry = match self.lin.status {
             Status::Optimal => {
                 if self.newton_from_polyhedra(w, alpha, out) {
@@ -550,6 +562,13 @@ impl TorqueSolver for ExactSolver {
             out.iterations += self.lin.iterations;
             if self.lin.status == Status::Optimal && self.newton_from_polyhedra(w, alpha, out) {
                 return;
+            }
+        }
+        // Where the inscribed polyhedra cannot hold the grasp, finer circumscribed ones:
+        // a grasp at the edge of feasibility is usually outside them too.
+        if inscribed_infeasible {
+            if let Some(reason) = self.outer_infeasible(w, MID_SIDES) {
+                return Self::infeasible(out, reason);
             }
         }
         // 4. The interior-point fallback.
@@ -591,6 +610,9 @@ impl TorqueSolver for ExactSolver {
             self.ipm_x.copy_from_slice(&ipm.x[..conic.nx]);
         }
         out.iterations += ipm.iterations;
+        if std::env::var("GT_TRACE").is_ok() {
+            eprintln!("ipm iterations {} end {:?}", ipm.iterations, end);
+        }
         out.method = Some("interior_point");
         if let Some(reason) = ray {
             return Self::infeasible(out, reason);
