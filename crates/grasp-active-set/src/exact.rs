@@ -610,9 +610,6 @@ impl TorqueSolver for ExactSolver {
             self.ipm_x.copy_from_slice(&ipm.x[..conic.nx]);
         }
         out.iterations += ipm.iterations;
-        if std::env::var("GT_TRACE").is_ok() {
-            eprintln!("ipm iterations {} end {:?}", ipm.iterations, end);
-        }
         out.method = Some("interior_point");
         if let Some(reason) = ray {
             return Self::infeasible(out, reason);
