@@ -47,7 +47,7 @@ pub const CERTIFICATE_TOLERANCE: f64 = 1e-9;
 const PROOF_SIDES: usize = 8;
 /// Sides of the circumscribed polygons tried before the interior-point method on a
 /// grasp the inscribed polyhedra cannot hold and the coarse proof left undecided: within
-/// 0.5 % of the cones, they prove most such grasps infeasible in a tenth of the
+/// 0.5 % of the cones, they prove most such grasps infeasible in a fifth of the
 /// method's time (docs/benchmarks.md, "Finer proofs before the interior-point method").
 const MID_SIDES: usize = 32;
 /// Sides of the finer circumscribed polygons tried when the interior-point method does

@@ -199,7 +199,7 @@ fn grasps_at_the_edge_of_feasibility_are_proved_infeasible_by_a_dual_ray() {
 /// Grasps the inscribed polyhedra cannot hold and the circumscribed ones at N = 8 can,
 /// where Newton fails from their optimum: outside the exact cones, but close. The
 /// circumscribed polyhedra at N = 32, within 0.5 % of the cones, prove most of them
-/// infeasible before the interior-point method runs (a tenth of its time: before, each
+/// infeasible before the interior-point method runs (a fifth of its time: before, each
 /// was proved by the method's dual ray). Found by the 12 000-grasp sweep (`fallbacks
 /// sweep`, 72 of its 110 dual-ray grasps). Clarabel agrees.
 #[test]
