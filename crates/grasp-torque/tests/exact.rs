@@ -460,27 +460,46 @@ fn resolve_in_a_control_loop_matches_cold_solves() {
 fn a_control_loop_starts_newton_from_the_interior_point_answer() {
     for (seed, friction) in [(10028, 0.25), (10369, 0.25), (15668, 0.25)] {
         let p = grasp(seed, friction);
-        let mut ctl = GraspSolver::new(&p, &exact_config()).unwrap();
-        let mut cold = GraspSolver::new(&p, &exact_config()).unwrap();
-        let first = ctl.resolve(&p.wrench).unwrap();
-        assert_eq!(first.method, Some("interior_point"), "seed {seed}");
         let mut w = p.wrench;
-        for k in 0..30 {
+        let path = (0..30).map(|k| {
             w[k % 6] *= 1.0 + 0.01 * ((k as f64) * 0.7).sin();
-            let warm = ctl.resolve(&w).unwrap().clone();
-            let fresh = cold.solve(&w, &WarmStart::default()).unwrap();
-            assert!(
-                warm.is_optimal() && fresh.is_optimal(),
-                "seed {seed} step {k}"
-            );
-            assert_eq!(warm.method, Some("newton"), "seed {seed} step {k}");
-            assert!(
-                rel(warm.objective, fresh.objective) < 1e-9,
-                "seed {seed} step {k}: {} vs {}",
-                warm.objective,
-                fresh.objective
-            );
+            w
+        });
+        newton_ticks_give_the_cold_answers(seed, &p, path, 1e-9, None);
+    }
+}
+
+/// A control loop on `p` along `path`, after a first solve at `p.wrench` by the
+/// interior-point method: every tick is by Newton and within `tol` (relative) of a
+/// cold solve's σ, made by `cold_method` if given.
+fn newton_ticks_give_the_cold_answers(
+    seed: u64,
+    p: &GraspProblem,
+    path: impl Iterator<Item = [f64; 6]>,
+    tol: f64,
+    cold_method: Option<&str>,
+) {
+    let mut ctl = GraspSolver::new(p, &exact_config()).unwrap();
+    let mut cold = GraspSolver::new(p, &exact_config()).unwrap();
+    let first = ctl.resolve(&p.wrench).unwrap();
+    assert_eq!(first.method, Some("interior_point"), "seed {seed}");
+    for (k, w) in path.enumerate() {
+        let warm = ctl.resolve(&w).unwrap().clone();
+        let fresh = cold.solve(&w, &WarmStart::default()).unwrap();
+        assert!(
+            warm.is_optimal() && fresh.is_optimal(),
+            "seed {seed} tick {k}"
+        );
+        assert_eq!(warm.method, Some("newton"), "seed {seed} tick {k}");
+        if cold_method.is_some() {
+            assert_eq!(fresh.method, cold_method, "seed {seed} tick {k}");
         }
+        assert!(
+            rel(warm.objective, fresh.objective) < tol,
+            "seed {seed} tick {k}: {} vs {}",
+            warm.objective,
+            fresh.objective
+        );
     }
 }
 
@@ -502,32 +521,10 @@ fn a_control_loop_follows_the_wrench_where_newton_loses_a_force_near_the_apex() 
         (12678, 0.25),
     ] {
         let p = grasp(seed, friction);
-        let mut ctl = GraspSolver::new(&p, &exact_config()).unwrap();
-        let mut cold = GraspSolver::new(&p, &exact_config()).unwrap();
-        assert_eq!(
-            ctl.resolve(&p.wrench).unwrap().method,
-            Some("interior_point"),
-            "seed {seed}"
-        );
         // As `grasp-torque bench` nudges the wrench: forces up, moments down.
         let near: [f64; 6] = std::array::from_fn(|i| p.wrench[i] * if i < 3 { 1.01 } else { 0.99 });
-        for k in 0..6 {
-            let w = if k % 2 == 0 { near } else { p.wrench };
-            let warm = ctl.resolve(&w).unwrap().clone();
-            let fresh = cold.solve(&w, &WarmStart::default()).unwrap();
-            assert!(
-                warm.is_optimal() && fresh.is_optimal(),
-                "seed {seed} tick {k}"
-            );
-            assert_eq!(warm.method, Some("newton"), "seed {seed} tick {k}");
-            assert_eq!(fresh.method, Some("interior_point"), "seed {seed} tick {k}");
-            assert!(
-                rel(warm.objective, fresh.objective) < 2e-9,
-                "seed {seed} tick {k}: {} vs {}",
-                warm.objective,
-                fresh.objective
-            );
-        }
+        let path = (0..6).map(|k| if k % 2 == 0 { near } else { p.wrench });
+        newton_ticks_give_the_cold_answers(seed, &p, path, 2e-9, Some("interior_point"));
     }
 }
 
