@@ -168,14 +168,7 @@ fn grasps_at_the_edge_of_feasibility_are_proved_infeasible_by_a_dual_ray() {
         (14620, 0.25),
     ];
     for (seed, friction) in edge {
-        let p = grasp(seed, friction);
-        let native = run(&p, Backend::ActiveSet, Cones::Exact);
-        assert_eq!(
-            native.status,
-            Status::Infeasible,
-            "seed {seed}: {:?}",
-            native.reason
-        );
+        let native = infeasible_as_clarabel_finds(seed, friction);
         match native.reason {
             Some(Reason::DualRay {
                 value,
@@ -188,12 +181,26 @@ fn grasps_at_the_edge_of_feasibility_are_proved_infeasible_by_a_dual_ray() {
             }
             ref other => panic!("seed {seed}: infeasible for {other:?}"),
         }
-        #[cfg(feature = "clarabel")]
-        {
-            let clarabel = run(&p, Backend::Clarabel, Cones::Exact);
-            assert_eq!(clarabel.status, Status::Infeasible, "seed {seed}");
-        }
     }
+}
+
+/// The native exact solve of a sweep grasp, asserted `infeasible`, as Clarabel finds it
+/// too (with the `clarabel` feature).
+fn infeasible_as_clarabel_finds(seed: u64, friction: f64) -> Solution {
+    let p = grasp(seed, friction);
+    let native = run(&p, Backend::ActiveSet, Cones::Exact);
+    assert_eq!(
+        native.status,
+        Status::Infeasible,
+        "seed {seed}: {:?}",
+        native.reason
+    );
+    #[cfg(feature = "clarabel")]
+    {
+        let clarabel = run(&p, Backend::Clarabel, Cones::Exact);
+        assert_eq!(clarabel.status, Status::Infeasible, "seed {seed}");
+    }
+    native
 }
 
 /// Grasps the inscribed polyhedra cannot hold and the circumscribed ones at N = 8 can,
@@ -211,14 +218,7 @@ fn finer_circumscribed_polyhedra_prove_grasps_infeasible_before_the_interior_poi
         (11600, 0.25),
         (14328, 0.25),
     ] {
-        let p = grasp(seed, friction);
-        let native = run(&p, Backend::ActiveSet, Cones::Exact);
-        assert_eq!(
-            native.status,
-            Status::Infeasible,
-            "seed {seed}: {:?}",
-            native.reason
-        );
+        let native = infeasible_as_clarabel_finds(seed, friction);
         assert!(
             matches!(
                 native.reason,
@@ -228,11 +228,6 @@ fn finer_circumscribed_polyhedra_prove_grasps_infeasible_before_the_interior_poi
             native.reason
         );
         assert_eq!(native.method, None, "seed {seed}");
-        #[cfg(feature = "clarabel")]
-        {
-            let clarabel = run(&p, Backend::Clarabel, Cones::Exact);
-            assert_eq!(clarabel.status, Status::Infeasible, "seed {seed}");
-        }
     }
 }
 
