@@ -59,7 +59,7 @@ pub(crate) fn run(args: &ExportQpArgs) -> Result<u8> {
         "latitudes": p.linearization.latitudes,
         "internal_forces": p.internal_forces.name(),
         "weights": ld.weights,
-        "H": rows(ld.h),
+        "H": rows(qp.h()),
         "c0": ld.c0,
         "Hw": rows(ld.hw),
         "C": rows(ld.eq),

@@ -24,7 +24,7 @@
 //! Zero-length steps switch to Bland's rule, which rules out cycling.
 
 use grasp_core::linalg::{decompose, orthonormal_columns, RankThreshold};
-use grasp_core::matrix::{add_columns, column_major, dot, min_value, norm_inf, write_columns};
+use grasp_core::matrix::{add_columns, dot, min_value, norm_inf, write_columns};
 use grasp_core::{
     Capabilities, ConicForm, EqFactors, ForceSpaceQp, LeastDistance, Matrix, Reason, RowId,
     Solution, Status, TorqueQp, TorqueSolver, WarmStart,
@@ -402,7 +402,7 @@ fn factors_cheaper(m: usize, p: usize) -> bool {
 
 impl Equalities {
     fn new(qp: &LeastDistance<'_>) -> Result<Self, BuildError> {
-        let cheaper = factors_cheaper(qp.h.ncols(), qp.eq.nrows());
+        let cheaper = factors_cheaper(qp.weights.len(), qp.eq.nrows());
         if let Some(eqs) = qp
             .eq_factors
             .filter(|_| cheaper)
@@ -410,7 +410,7 @@ impl Equalities {
         {
             return Ok(eqs);
         }
-        let m = qp.h.ncols();
+        let m = qp.weights.len();
         let dinv: Vec<f64> = qp.weights.iter().map(|w| 1.0 / w.sqrt()).collect();
         let cd = Matrix::from_fn(qp.eq.nrows(), m, |i, j| qp.eq[(i, j)] * dinv[j]);
         // The core decided the rank: every row of C is independent. Weighting must not
@@ -439,7 +439,7 @@ impl Equalities {
     /// in N. `None` (the decomposition decides) without equalities, or when the
     /// weighting leaves `diag(g) N_B` near rank-deficient.
     fn from_factors(qp: &LeastDistance<'_>, f: EqFactors<'_>) -> Option<Self> {
-        let (p, m) = (qp.eq.nrows(), qp.h.ncols());
+        let (p, m) = (qp.eq.nrows(), qp.weights.len());
         if p == 0
             || f.basis.nrows() != m
             || f.basis.ncols() != p
@@ -512,7 +512,7 @@ impl Engine {
         settings: ActiveSetSettings,
         eqs: Equalities,
     ) -> Result<Self, BuildError> {
-        let m = qp.h.ncols();
+        let m = qp.weights.len();
         let Equalities {
             dinv,
             null_basis,
@@ -525,61 +525,76 @@ impl Engine {
         write_columns(&pu, &mut pu_cols, m);
         pu_cols.iter_mut().for_each(|v| *v = -*v);
         // One product for both: H D⁻¹ [N | −pu], with D⁻¹ folded into the short side.
-        let np = Matrix::from_fn(m, k + 6, |i, j| {
-            dinv[i]
-                * if j < k {
-                    null_basis[(i, j)]
-                } else {
-                    -pu[(i, j - k)]
-                }
-        });
-        let hnp = qp.h_mul(&np);
-        let rows = qp.h.nrows();
-        let hn = |i: usize| &hnp.row(i)[..k];
-        // ĉ(w) = c0 − (hw + Hd pu) w, before normalisation.
-        let mfull = |i: usize, j: usize| qp.hw[(i, j)] + hnp[(i, k + j)];
-        let norms: Vec<f64> = (0..rows)
-            .map(|i| grasp_core::matrix::norm2(hn(i)))
-            .collect();
-        // A row no torque affects: its norm in y is at rounding level of H D⁻¹'s.
-        let hscale = (0..rows)
-            .map(|i| {
-                let r = qp.h.row(i);
-                r.iter()
-                    .zip(&dinv)
-                    .map(|(h, d)| (h * d) * (h * d))
-                    .sum::<f64>()
-            })
-            .fold(0.0, f64::max)
-            .sqrt();
-        let zero = 1e3 * f64::EPSILON * (m as f64) * hscale.max(f64::MIN_POSITIVE);
-        let (mut h_row, mut fixed) = (Vec::new(), Vec::new());
-        let mut red_row = vec![usize::MAX; rows];
-        for (i, &nrm) in norms.iter().enumerate() {
-            if nrm > zero {
-                red_row[i] = h_row.len();
-                h_row.push(i);
-            } else {
-                fixed.push(i);
+        let mut np = Matrix::zeros(m, k + 6);
+        for (i, row) in np.as_mut_slice().chunks_exact_mut(k + 6).enumerate() {
+            let di = dinv[i];
+            for (x, v) in row[..k].iter_mut().zip(null_basis.row(i)) {
+                *x = di * v;
+            }
+            for (x, v) in row[k..].iter_mut().zip(pu.row(i)) {
+                *x = di * -v;
             }
         }
-        let nr = h_row.len();
-        let a = Matrix::from_fn(nr, k, |r, j| hn(h_row[r])[j] / norms[h_row[r]]);
-        let nu: Vec<f64> = h_row.iter().map(|&i| norms[i]).collect();
-        let c0n: Vec<f64> = h_row.iter().map(|&i| qp.c0[i] / norms[i]).collect();
-        let mut a_cols = vec![0.0; nr * k];
-        write_columns(&a, &mut a_cols, nr);
-        let mn_cols = column_major(nr, 6, |r, j| mfull(h_row[r], j) / norms[h_row[r]]);
-        let fixed_c0 = fixed.iter().map(|&i| qp.c0[i]).collect();
-        let fixed_m = Matrix::from_fn(fixed.len(), 6, |r, j| mfull(fixed[r], j));
+        let hnp = qp.h_mul(&np);
+        let rows = qp.rows.len();
+        // ĉ(w) = c0 − (hw + Hd pu) w, before normalisation: row i's wrench terms.
+        let mfull = |i: usize| -> [f64; 6] {
+            let mut out = [0.0; 6];
+            for ((o, h), v) in out.iter_mut().zip(qp.hw.row(i)).zip(&hnp.row(i)[k..]) {
+                *o = h + v;
+            }
+            out
+        };
+        // A row no torque affects: its norm in y is at rounding level of H D⁻¹'s.
+        let hscale = qp.max_row_norm(&dinv);
+        let zero = 1e3 * f64::EPSILON * (m as f64) * hscale.max(f64::MIN_POSITIVE);
+        let (mut h_row, mut fixed, mut nu) = (Vec::new(), Vec::new(), Vec::new());
+        let mut red_row = vec![usize::MAX; rows];
         // A fixed row whose wrench terms are themselves rounding (a contact that neither
         // torque nor wrench loads, as an unactuated joint can leave one) is judged
         // against the rounding of the largest wrench row.
-        let fixed_floor = 1e3
-            * f64::EPSILON
-            * (0..rows)
-                .map(|i| (0..6).map(|j| mfull(i, j).abs()).sum::<f64>())
-                .fold(0.0, f64::max);
+        let mut largest_wrench_row = 0.0f64;
+        for i in 0..rows {
+            let nrm = grasp_core::matrix::norm2(&hnp.row(i)[..k]);
+            if nrm > zero {
+                red_row[i] = h_row.len();
+                h_row.push(i);
+                nu.push(nrm);
+            } else {
+                fixed.push(i);
+            }
+            let mut size = 0.0;
+            for v in mfull(i) {
+                size += v.abs();
+            }
+            largest_wrench_row = largest_wrench_row.max(size);
+        }
+        let fixed_floor = 1e3 * f64::EPSILON * largest_wrench_row;
+        // The reduced rows, normalised: row-major in `a`, column-major in `a_cols` and
+        // `mn_cols`.
+        let nr = h_row.len();
+        let mut a = Matrix::zeros(nr, k);
+        let mut a_cols = vec![0.0; nr * k];
+        let mut mn_cols = vec![0.0; nr * 6];
+        let mut c0n = Vec::with_capacity(nr);
+        // (By the reciprocal: a division per row, not per entry, which was a tenth of
+        // the build. Each entry moves by an ulp at most.)
+        for (r, (&i, &nrm)) in h_row.iter().zip(&nu).enumerate() {
+            let inv = 1.0 / nrm;
+            for (x, v) in a.row_mut(r).iter_mut().zip(&hnp.row(i)[..k]) {
+                *x = v * inv;
+            }
+            for (j, v) in mfull(i).iter().enumerate() {
+                mn_cols[j * nr + r] = v * inv;
+            }
+            c0n.push(qp.c0[i] * inv);
+        }
+        write_columns(&a, &mut a_cols, nr);
+        let fixed_c0 = fixed.iter().map(|&i| qp.c0[i]).collect();
+        let mut fixed_m = Matrix::zeros(fixed.len(), 6);
+        for (r, &i) in fixed.iter().enumerate() {
+            fixed_m.row_mut(r).copy_from_slice(&mfull(i));
+        }
         let kp = k + 1;
         let ws = Workspace {
             b: vec![0.0; nr],

@@ -32,8 +32,8 @@ fn assert_kkt(qp: &TorqueQp, w: &[f64; 6], s: &Solution) -> Result<(), TestCaseE
     let scale = norm_inf(&c).max(norm_inf(tau)).max(f64::MIN_POSITIVE);
     let eps = 1e-8;
     for i in 0..rows {
-        let hn = grasp_core::matrix::norm2(qp.h.row(i)).max(f64::MIN_POSITIVE);
-        let slack = (dot(qp.h.row(i), tau) - c[i]) / hn;
+        let hn = grasp_core::matrix::norm2(qp.h().row(i)).max(f64::MIN_POSITIVE);
+        let slack = (dot(qp.h().row(i), tau) - c[i]) / hn;
         prop_assert!(slack >= -eps * scale, "primal: row {} slack {}", i, slack);
         prop_assert!(lam[i] >= 0.0, "dual: row {} multiplier {}", i, lam[i]);
         prop_assert!(
@@ -48,8 +48,8 @@ fn assert_kkt(qp: &TorqueQp, w: &[f64; 6], s: &Solution) -> Result<(), TestCaseE
     let mut mag = norm_inf(&r);
     for i in 0..rows {
         for j in 0..m {
-            r[j] -= lam[i] * qp.h[(i, j)];
-            mag = mag.max((lam[i] * qp.h[(i, j)]).abs());
+            r[j] -= lam[i] * qp.h()[(i, j)];
+            mag = mag.max((lam[i] * qp.h()[(i, j)]).abs());
         }
     }
     let dec = svd(&qp.model.eq).unwrap();

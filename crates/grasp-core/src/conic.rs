@@ -197,13 +197,14 @@ impl ConicForm {
         let linear_at = zero.len();
         let mut nonneg = Vec::new();
         let mut row_scale = Vec::with_capacity(qp.inequality_rows());
+        let h = qp.h();
         for i in 0..qp.inequality_rows() {
             let rho = match qp.rows[i] {
                 RowId::TorqueLimit { joint, .. } => col_scale[joint],
                 _ => 1.0,
             };
             let mut a = vec![0.0; nx];
-            for ((aj, h), s) in a.iter_mut().zip(qp.h.row(i)).zip(&col_scale) {
+            for ((aj, h), s) in a.iter_mut().zip(h.row(i)).zip(&col_scale) {
                 *aj = -rho * h / s;
             }
             for ((aj, h), s) in a[m..].iter_mut().zip(qp.hp.row(i)).zip(&col_scale[m..]) {

@@ -27,8 +27,8 @@ pub use matrix::Matrix;
 pub use model::{Equilibrium, GraspModel, InternalForces, ModelOptions};
 pub use problem::GraspProblem;
 pub use qp::{
-    ConeRepr, Constraints, ContactBlock, EqFactors, ForceSpaceQp, LeastDistance, RowFactors, RowId,
-    TorqueQp,
+    ConeRepr, Constraints, ContactBlock, EqFactors, ForceSpaceQp, InequalityRows, LeastDistance,
+    RowFactors, RowId, TorqueQp,
 };
 pub use solver::{
     solve, solve_into, solve_into_with, Capabilities, Check, Diagnostics, Reason, Solution, Status,

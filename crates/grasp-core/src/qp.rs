@@ -22,7 +22,7 @@ use crate::matrix::{dot, Matrix};
 use crate::model::GraspModel;
 use serde::Serialize;
 use std::fmt;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// The stable identity of a linear constraint row.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
@@ -145,7 +145,7 @@ pub struct ContactBlock {
 #[derive(Clone, Copy, Debug)]
 pub struct LeastDistance<'a> {
     /// Inequality rows, R × k.
-    pub h: &'a Matrix,
+    pub h: InequalityRows<'a>,
     /// Constant part of the right-hand side.
     pub c0: &'a [f64],
     /// Wrench part of the right-hand side, R × 6.
@@ -158,11 +158,19 @@ pub struct LeastDistance<'a> {
     pub weights: &'a [f64],
     /// Identity of each inequality row.
     pub rows: &'a [RowId],
-    /// How `h` was formed, when it is `S Z2` (see [`RowFactors`]).
-    pub factors: Option<RowFactors<'a>>,
     /// How `eq` was formed, when the model's consistency rows are it (see
     /// [`EqFactors`]).
     pub eq_factors: Option<EqFactors<'a>>,
+}
+
+/// The inequality rows H of a [`LeastDistance`] problem.
+#[derive(Clone, Copy, Debug)]
+pub enum InequalityRows<'a> {
+    /// H itself, R × k.
+    Formed(&'a Matrix),
+    /// `H = S Z2`, never formed: the native solver reads H only through products and
+    /// row norms, which the factors give for a fraction of H's own cost.
+    Factored(RowFactors<'a>),
 }
 
 /// `C = Bᵀ diag(scale)` with B orthonormal (m × p), and `null` an orthonormal basis of
@@ -196,22 +204,22 @@ pub struct RowFactors<'a> {
 impl LeastDistance<'_> {
     /// `H X` for X with one row per variable, through [`RowFactors`] when H has them.
     pub fn h_mul(&self, x: &Matrix) -> Matrix {
-        let Some(f) = self.factors else {
-            return self.h.matmul(x);
+        let f = match self.h {
+            InequalityRows::Formed(h) => return h.matmul(x),
+            InequalityRows::Factored(f) => f,
         };
         let zx = f.z2.matmul(x);
-        let mut out = Matrix::zeros(self.h.nrows(), x.ncols());
+        let cols = x.ncols();
+        let mut out = Matrix::zeros(self.rows.len(), cols);
         for (c, repr) in f.contacts.iter().zip(f.cones) {
             let dim = c.model.dim();
+            let zc = &zx.as_slice()[c.offset * cols..(c.offset + dim) * cols];
             for k in 0..c.rows {
                 let o = out.row_mut(c.first_row + k);
-                for t in 0..dim {
-                    let s = match repr {
-                        ConeRepr::Inscribed(cone) => cone.faces[(k, t)],
-                        ConeRepr::Exact => (t == c.model.normal_index()) as u8 as f64,
-                    };
+                for (t, z) in zc.chunks_exact(cols.max(1)).enumerate() {
+                    let s = face_entry(repr, &c.model, k, t);
                     if s != 0.0 {
-                        for (y, z) in o.iter_mut().zip(zx.row(c.offset + t)) {
+                        for (y, z) in o.iter_mut().zip(z) {
                             *y += s * z;
                         }
                     }
@@ -228,6 +236,66 @@ impl LeastDistance<'_> {
         }
         out
     }
+
+    /// The largest Euclidean norm of a row of `H diag(col_scale)`: through [`RowFactors`]
+    /// from each contact's Gram matrix of its scaled rows of Z2 (at most 4 × 4), so
+    /// without H.
+    pub fn max_row_norm(&self, col_scale: &[f64]) -> f64 {
+        let f = match self.h {
+            InequalityRows::Formed(h) => {
+                return (0..h.nrows())
+                    .map(|i| {
+                        h.row(i)
+                            .iter()
+                            .zip(col_scale)
+                            .map(|(h, d)| (h * d) * (h * d))
+                            .sum::<f64>()
+                    })
+                    .fold(0.0, f64::max)
+                    .sqrt()
+            }
+            InequalityRows::Factored(f) => f,
+        };
+        let mut largest = 0.0f64;
+        for (c, repr) in f.contacts.iter().zip(f.cones) {
+            let dim = c.model.dim();
+            let mut gram = [[0.0f64; 4]; 4];
+            for t in 0..dim {
+                for u in 0..=t {
+                    let v: f64 =
+                        f.z2.row(c.offset + t)
+                            .iter()
+                            .zip(f.z2.row(c.offset + u))
+                            .zip(col_scale)
+                            .map(|((a, b), d)| (a * d) * (b * d))
+                            .sum();
+                    gram[t][u] = v;
+                    gram[u][t] = v;
+                }
+            }
+            match repr {
+                ConeRepr::Inscribed(cone) => {
+                    for s in cone.faces.as_slice().chunks_exact(dim).take(c.rows) {
+                        let mut sq = 0.0;
+                        for (st, g) in s.iter().zip(&gram) {
+                            sq += st * dot(s, &g[..dim]);
+                        }
+                        largest = largest.max(sq);
+                    }
+                }
+                ConeRepr::Exact => {
+                    let n = c.model.normal_index();
+                    largest = largest.max(gram[n][n]);
+                }
+            }
+        }
+        for id in self.rows {
+            if let RowId::TorqueLimit { joint, .. } = *id {
+                largest = largest.max(col_scale[joint] * col_scale[joint]);
+            }
+        }
+        largest.sqrt()
+    }
 }
 
 /// The linear rows of a model under some constraints: the view every backend reads.
@@ -239,8 +307,9 @@ pub struct TorqueQp {
     pub constraints: Constraints,
     /// Each contact's rows.
     pub contacts: Vec<ContactBlock>,
-    /// H, R × m.
-    pub h: Matrix,
+    /// H = S Z2, R × m, formed the first time [`TorqueQp::h`] is called: the native
+    /// solver reads it through [`RowFactors`] and never forms it.
+    h: OnceLock<Matrix>,
     /// Hp = S N, R × d (d = 0 unless the internal forces are free).
     pub hp: Matrix,
     /// `c(w) = c0 − hw · w`: the constant part (minimum normal forces, limits).
@@ -261,6 +330,14 @@ fn contact_faces(model: &GraspModel, ci: usize, repr: &ConeRepr) -> Matrix {
             row[c.normal_index()] = 1.0;
             Matrix::from_rows(&[row], c.dim())
         }
+    }
+}
+
+/// Entry `(k, t)` of a contact's block of S: face k's coefficient of force component t.
+fn face_entry(repr: &ConeRepr, c: &ContactModel, k: usize, t: usize) -> f64 {
+    match repr {
+        ConeRepr::Inscribed(cone) => cone.faces.as_slice()[k * c.dim() + t],
+        ConeRepr::Exact => (t == c.normal_index()) as u8 as f64,
     }
 }
 
@@ -286,19 +363,16 @@ fn block_rows(model: &GraspModel, ci: usize, faces: &Matrix) -> (Matrix, Matrix,
 impl TorqueQp {
     /// The linear rows of `model` under `constraints` (one entry per contact).
     pub fn new(model: Arc<GraspModel>, constraints: Constraints) -> Self {
-        let (m, d) = (model.joints(), model.free_dim());
+        let d = model.free_dim();
         let face_rows = |ci: usize| match &constraints.cones[ci] {
             ConeRepr::Inscribed(cone) => cone.faces.nrows(),
             ConeRepr::Exact => 1,
         };
         let limits = model.torque_limits.iter().flatten().count();
         let total: usize = (0..constraints.cones.len()).map(face_rows).sum::<usize>() + 2 * limits;
-        // Rows are written in place: H = S Z2, Hp = S N, Hw = S Z1 (S block-diagonal).
-        let (mut h, mut hp, mut hw) = (
-            Matrix::zeros(total, m),
-            Matrix::zeros(total, d),
-            Matrix::zeros(total, 6),
-        );
+        // Rows are written in place: Hp = S N, Hw = S Z1 (S block-diagonal); H = S Z2
+        // waits for its first reader.
+        let (mut hp, mut hw) = (Matrix::zeros(total, d), Matrix::zeros(total, 6));
         let mut c0 = Vec::with_capacity(total);
         let mut rows = Vec::with_capacity(total);
         let mut contacts = Vec::with_capacity(model.contacts.len());
@@ -313,39 +387,26 @@ impl TorqueQp {
                 first_row: first,
                 rows: r,
             });
-            // The contact's rows of Z2 and Z1, which its face rows combine.
-            let (z2, z1) = (
-                &model.z2.as_slice()[off * m..(off + dim) * m],
-                &model.z1.as_slice()[off * 6..(off + dim) * 6],
-            );
+            // The contact's rows of Z1, which its face rows combine.
+            let z1 = &model.z1.as_slice()[off * 6..(off + dim) * 6];
             for k in 0..r {
                 let i = first + k;
-                let face = |t: usize| match repr {
-                    ConeRepr::Inscribed(cone) => cone.faces.as_slice()[k * dim + t],
-                    ConeRepr::Exact => (t == c.normal_index()) as u8 as f64,
-                };
-                let hrow = h.row_mut(i);
-                for t in 0..dim {
-                    let s = face(t);
-                    if s != 0.0 {
-                        for (x, z) in hrow.iter_mut().zip(&z2[t * m..(t + 1) * m]) {
+                let mut face = [0.0f64; 4];
+                for (t, f) in face.iter_mut().enumerate().take(dim) {
+                    *f = face_entry(repr, c, k, t);
+                }
+                let mut wrow = [0.0f64; 6];
+                for (s, z) in face.iter().zip(z1.chunks_exact(6)) {
+                    if *s != 0.0 {
+                        for (x, z) in wrow.iter_mut().zip(z) {
                             *x += s * z;
                         }
                     }
                 }
-                let wrow = hw.row_mut(i);
-                for t in 0..dim {
-                    let s = face(t);
-                    if s != 0.0 {
-                        for (x, z) in wrow.iter_mut().zip(&z1[t * 6..(t + 1) * 6]) {
-                            *x += s * z;
-                        }
-                    }
-                }
+                hw.row_mut(i).copy_from_slice(&wrow);
                 if d > 0 {
-                    for t in 0..dim {
-                        let s = face(t);
-                        if s != 0.0 {
+                    for (t, s) in face.iter().enumerate().take(dim) {
+                        if *s != 0.0 {
                             let nrow = model.passive_basis.row(off + t);
                             for (x, z) in hp.row_mut(i).iter_mut().zip(nrow) {
                                 *x += s * z;
@@ -365,14 +426,13 @@ impl TorqueQp {
         for (j, lim) in model.torque_limits.iter().enumerate() {
             if let Some(t) = *lim {
                 for upper in [false, true] {
-                    h[(rows.len(), j)] = if upper { -1.0 } else { 1.0 };
                     c0.push(-t);
                     rows.push(RowId::TorqueLimit { joint: j, upper });
                 }
             }
         }
         Self {
-            h,
+            h: OnceLock::new(),
             hp,
             hw,
             c0,
@@ -381,6 +441,35 @@ impl TorqueQp {
             constraints,
             model,
         }
+    }
+
+    /// H = S Z2, R × m (eqs. 39, 43), formed on the first call.
+    pub fn h(&self) -> &Matrix {
+        self.h.get_or_init(|| {
+            let m = self.model.joints();
+            let mut h = Matrix::zeros(self.rows.len(), m);
+            for (block, repr) in self.contacts.iter().zip(&self.constraints.cones) {
+                let (off, dim) = (block.offset, block.model.dim());
+                let z2 = &self.model.z2.as_slice()[off * m..(off + dim) * m];
+                for k in 0..block.rows {
+                    let hrow = h.row_mut(block.first_row + k);
+                    for t in 0..dim {
+                        let s = face_entry(repr, &block.model, k, t);
+                        if s != 0.0 {
+                            for (x, z) in hrow.iter_mut().zip(&z2[t * m..(t + 1) * m]) {
+                                *x += s * z;
+                            }
+                        }
+                    }
+                }
+            }
+            for (i, id) in self.rows.iter().enumerate() {
+                if let RowId::TorqueLimit { joint, upper } = *id {
+                    h[(i, joint)] = if upper { -1.0 } else { 1.0 };
+                }
+            }
+            h
+        })
     }
 
     /// The model of a validated problem, inscribed at the problem's linearisation.
@@ -419,7 +508,10 @@ impl TorqueQp {
             v.extend((end..a.nrows()).map(|i| a.row(i).to_vec()));
             Matrix::from_rows(&v, a.ncols())
         };
-        self.h = splice(&self.h, &h);
+        // (An H not yet formed is formed from the new rows when first read.)
+        if let Some(formed) = self.h.get_mut() {
+            *formed = splice(formed, &h);
+        }
         self.hp = splice(&self.hp, &hp);
         self.hw = splice(&self.hw, &hw);
         let mut c0: Vec<f64> = vec![0.0; new_rows];
@@ -437,7 +529,7 @@ impl TorqueQp {
 
     /// Number of joints m.
     pub fn joints(&self) -> usize {
-        self.h.ncols()
+        self.model.joints()
     }
 
     /// Number of contact force components n.
@@ -447,7 +539,7 @@ impl TorqueQp {
 
     /// Number of linear inequality rows.
     pub fn inequality_rows(&self) -> usize {
-        self.h.nrows()
+        self.rows.len()
     }
 
     /// Number of consistency equalities p.
@@ -465,18 +557,17 @@ impl TorqueQp {
     /// The least-distance form in τ, for the native solver.
     pub fn least_distance(&self) -> LeastDistance<'_> {
         LeastDistance {
-            h: &self.h,
+            h: InequalityRows::Factored(RowFactors {
+                z2: &self.model.z2,
+                contacts: &self.contacts,
+                cones: &self.constraints.cones,
+            }),
             c0: &self.c0,
             hw: &self.hw,
             eq: &self.model.eq,
             eq_w: &self.model.eq_w,
             weights: &self.model.weights,
             rows: &self.rows,
-            factors: Some(RowFactors {
-                z2: &self.model.z2,
-                contacts: &self.contacts,
-                cones: &self.constraints.cones,
-            }),
             eq_factors: Some(EqFactors {
                 basis: &self.model.eq_basis,
                 null: &self.model.eq_null,
@@ -577,14 +668,13 @@ impl ForceSpaceQp {
     /// The least-distance form in f, for the native solver.
     pub fn least_distance(&self) -> LeastDistance<'_> {
         LeastDistance {
-            h: &self.h,
+            h: InequalityRows::Formed(&self.h),
             c0: &self.c0,
             hw: &self.hw,
             eq: &self.eq,
             eq_w: &self.eq_w,
             weights: &self.weights,
             rows: &self.rows,
-            factors: None,
             eq_factors: None,
         }
     }

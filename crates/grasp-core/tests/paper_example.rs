@@ -123,7 +123,7 @@ fn h_matches_eq_52_where_printed_in_full() {
     let mut checked = 0;
     for (j, col) in printed.iter().enumerate() {
         for (i, &p) in col.iter().enumerate() {
-            let ours = qp.h[(i, j)] * paper_scale(i);
+            let ours = qp.h()[(i, j)] * paper_scale(i);
             if truncated.contains(&(j, i)) {
                 assert!((ours - 0.0767).abs() < 1e-4, "H[{i}][{j}] = {ours}");
                 continue;
@@ -149,7 +149,7 @@ fn tau1_is_feasible_with_exactly_rows_2_and_14_active() {
     let mut c = vec![0.0; qp.inequality_rows()];
     qp.c_into(&w, &mut c);
     let slack: Vec<f64> = (0..qp.inequality_rows())
-        .map(|i| grasp_core::matrix::dot(qp.h.row(i), &tau1) - c[i])
+        .map(|i| grasp_core::matrix::dot(qp.h().row(i), &tau1) - c[i])
         .collect();
     let tol = 1e-12 * 10.0;
     assert!(slack.iter().all(|&s| s >= -tol), "{slack:?}");
@@ -179,7 +179,7 @@ fn the_printed_c_does_not_match_the_printed_data_but_the_rebuilt_one_does() {
     // With the printed c, τ1 is not a feasible point whose key set is I1 = (2, 14).
     let tau1 = [7.5, -2.0, -7.5, 2.0];
     let slack: Vec<f64> = (0..18)
-        .map(|i| grasp_core::matrix::dot(qp.h.row(i), &tau1) * paper_scale(i) - printed_c[i])
+        .map(|i| grasp_core::matrix::dot(qp.h().row(i), &tau1) * paper_scale(i) - printed_c[i])
         .collect();
     let feasible = slack.iter().all(|&s| s >= -1e-9);
     let active: Vec<usize> = (0..18)

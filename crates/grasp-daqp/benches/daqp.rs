@@ -136,7 +136,7 @@ fn main() {
             // σ = Σ w_j τ_j² of a torque.
             let sigma =
                 |t: &[f64]| -> f64 { t.iter().zip(ld.weights).map(|(t, wj)| wj * t * t).sum() };
-            let (n, r, e) = (qp.joints(), ld.h.nrows(), ld.eq.nrows());
+            let (n, r, e) = (qp.joints(), qp.inequality_rows(), ld.eq.nrows());
             let mut h = vec![0.0; n * n];
             for j in 0..n {
                 h[j * n + j] = 2.0 * ld.weights[j];
@@ -146,7 +146,7 @@ fn main() {
                 a.extend_from_slice(ld.eq.row(i));
             }
             for i in 0..r {
-                a.extend_from_slice(ld.h.row(i));
+                a.extend_from_slice(qp.h().row(i));
             }
             let equality: Vec<bool> = (0..e + r).map(|i| i < e).collect();
             let mut upper = vec![INFINITY; e + r];

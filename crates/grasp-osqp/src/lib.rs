@@ -112,7 +112,7 @@ impl OsqpSolver {
                 let row = if i < p_eq {
                     qp.model.eq.row(i)
                 } else {
-                    qp.h.row(i - p_eq)
+                    qp.h().row(i - p_eq)
                 };
                 row.to_vec()
             }),
