@@ -258,6 +258,7 @@ impl LeastDistance<'_> {
         };
         let mut largest = 0.0f64;
         for (c, repr) in f.contacts.iter().zip(f.cones) {
+            // (A contact has at most four force components: `ContactModel::dim`.)
             let dim = c.model.dim();
             let mut gram = [[0.0f64; 4]; 4];
             for t in 0..dim {
@@ -391,6 +392,7 @@ impl TorqueQp {
             let z1 = &model.z1.as_slice()[off * 6..(off + dim) * 6];
             for k in 0..r {
                 let i = first + k;
+                // (At most four force components: `ContactModel::dim`.)
                 let mut face = [0.0f64; 4];
                 for (t, f) in face.iter_mut().enumerate().take(dim) {
                     *f = face_entry(repr, c, k, t);
