@@ -548,7 +548,8 @@ impl Engine {
         // A row no torque affects: its norm in y is at rounding level of H D⁻¹'s.
         let hscale = qp.max_row_norm(&dinv);
         let zero = 1e3 * f64::EPSILON * (m as f64) * hscale.max(f64::MIN_POSITIVE);
-        let (mut h_row, mut fixed, mut nu) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut h_row, mut fixed) = (Vec::with_capacity(rows), Vec::new());
+        let mut nu = Vec::with_capacity(rows);
         let mut red_row = vec![usize::MAX; rows];
         // A fixed row whose wrench terms are themselves rounding (a contact that neither
         // torque nor wrench loads, as an unactuated joint can leave one) is judged

@@ -215,15 +215,8 @@ impl LeastDistance<'_> {
             let dim = c.model.dim();
             let zc = &zx.as_slice()[c.offset * cols..(c.offset + dim) * cols];
             for k in 0..c.rows {
-                let o = out.row_mut(c.first_row + k);
-                for (t, z) in zc.chunks_exact(cols.max(1)).enumerate() {
-                    let s = face_entry(repr, &c.model, k, t);
-                    if s != 0.0 {
-                        for (y, z) in o.iter_mut().zip(z) {
-                            *y += s * z;
-                        }
-                    }
-                }
+                let (face, dim) = face_row(repr, &c.model, k);
+                combine(out.row_mut(c.first_row + k), &face[..dim], zc);
             }
         }
         for (i, id) in self.rows.iter().enumerate() {
@@ -263,23 +256,20 @@ impl LeastDistance<'_> {
             let mut gram = [[0.0f64; 4]; 4];
             for t in 0..dim {
                 for u in 0..=t {
-                    let v: f64 =
-                        f.z2.row(c.offset + t)
-                            .iter()
-                            .zip(f.z2.row(c.offset + u))
-                            .zip(col_scale)
-                            .map(|((a, b), d)| (a * d) * (b * d))
-                            .sum();
+                    let v = scaled_dot(f.z2.row(c.offset + t), f.z2.row(c.offset + u), col_scale);
                     gram[t][u] = v;
                     gram[u][t] = v;
                 }
             }
             match repr {
                 ConeRepr::Inscribed(cone) => {
+                    // (Zero-padded to four: a fixed number of terms, no loop bounds.)
+                    let mut f = [0.0f64; 4];
                     for s in cone.faces.as_slice().chunks_exact(dim).take(c.rows) {
+                        f[..dim].copy_from_slice(s);
                         let mut sq = 0.0;
-                        for (st, g) in s.iter().zip(&gram) {
-                            sq += st * dot(s, &g[..dim]);
+                        for (ft, g) in f.iter().zip(&gram) {
+                            sq += ft * (g[0] * f[0] + g[1] * f[1] + g[2] * f[2] + g[3] * f[3]);
                         }
                         largest = largest.max(sq);
                     }
@@ -342,6 +332,75 @@ fn face_entry(repr: &ConeRepr, c: &ContactModel, k: usize, t: usize) -> f64 {
     }
 }
 
+/// `Σ (a_i d_i)(b_i d_i)` in four independent lanes (a single chain of additions waits
+/// on each one's latency).
+fn scaled_dot(a: &[f64], b: &[f64], d: &[f64]) -> f64 {
+    let mut s = [0.0f64; 4];
+    let (mut ca, mut cb, mut cd) = (a.chunks_exact(4), b.chunks_exact(4), d.chunks_exact(4));
+    for ((x, y), z) in (&mut ca).zip(&mut cb).zip(&mut cd) {
+        for l in 0..4 {
+            s[l] += (x[l] * z[l]) * (y[l] * z[l]);
+        }
+    }
+    let mut tail = 0.0;
+    for ((x, y), z) in ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .zip(cd.remainder())
+    {
+        tail += (x * z) * (y * z);
+    }
+    (s[0] + s[1]) + (s[2] + s[3]) + tail
+}
+
+/// Contact `c`'s face row k (at most four entries: `ContactModel::dim`).
+fn face_row(repr: &ConeRepr, c: &ContactModel, k: usize) -> ([f64; 4], usize) {
+    let mut face = [0.0f64; 4];
+    let dim = c.dim();
+    for (t, f) in face.iter_mut().enumerate().take(dim) {
+        *f = face_entry(repr, c, k, t);
+    }
+    (face, dim)
+}
+
+/// `out = Σ_t face[t] z_t`, z_t the rows of `z` (each `out.len()` long), summed in
+/// order of t in one pass. (The same sums as adding each nonzero term to a zero row in
+/// turn, up to the sign of an exact zero.)
+fn combine(out: &mut [f64], face: &[f64], z: &[f64]) {
+    let cols = out.len();
+    match *face {
+        [s0] => {
+            for (o, a) in out.iter_mut().zip(&z[..cols]) {
+                *o = s0 * a;
+            }
+        }
+        [s0, s1, s2] => {
+            let (z0, rest) = z.split_at(cols);
+            let (z1, z2) = rest.split_at(cols);
+            for (((o, a), b), c) in out.iter_mut().zip(z0).zip(z1).zip(&z2[..cols]) {
+                *o = s0 * a + s1 * b + s2 * c;
+            }
+        }
+        [s0, s1, s2, s3] => {
+            let (z0, rest) = z.split_at(cols);
+            let (z1, rest) = rest.split_at(cols);
+            let (z2, z3) = rest.split_at(cols);
+            for ((((o, a), b), c), d) in out.iter_mut().zip(z0).zip(z1).zip(z2).zip(&z3[..cols]) {
+                *o = s0 * a + s1 * b + s2 * c + s3 * d;
+            }
+        }
+        _ => {
+            out.iter_mut().for_each(|o| *o = 0.0);
+            for (s, zt) in face.iter().zip(z.chunks_exact(cols.max(1))) {
+                for (o, a) in out.iter_mut().zip(zt) {
+                    *o += s * a;
+                }
+            }
+        }
+    }
+}
+
 /// `(S_c Z2_c, S_c N_c, S_c Z1_c)` of one contact's rows.
 fn block_rows(model: &GraspModel, ci: usize, faces: &Matrix) -> (Matrix, Matrix, Matrix) {
     let off = model.offsets[ci];
@@ -392,29 +451,11 @@ impl TorqueQp {
             let z1 = &model.z1.as_slice()[off * 6..(off + dim) * 6];
             for k in 0..r {
                 let i = first + k;
-                // (At most four force components: `ContactModel::dim`.)
-                let mut face = [0.0f64; 4];
-                for (t, f) in face.iter_mut().enumerate().take(dim) {
-                    *f = face_entry(repr, c, k, t);
-                }
-                let mut wrow = [0.0f64; 6];
-                for (s, z) in face.iter().zip(z1.chunks_exact(6)) {
-                    if *s != 0.0 {
-                        for (x, z) in wrow.iter_mut().zip(z) {
-                            *x += s * z;
-                        }
-                    }
-                }
-                hw.row_mut(i).copy_from_slice(&wrow);
+                let (face, _) = face_row(repr, c, k);
+                combine(hw.row_mut(i), &face[..dim], z1);
                 if d > 0 {
-                    for (t, s) in face.iter().enumerate().take(dim) {
-                        if *s != 0.0 {
-                            let nrow = model.passive_basis.row(off + t);
-                            for (x, z) in hp.row_mut(i).iter_mut().zip(nrow) {
-                                *x += s * z;
-                            }
-                        }
-                    }
+                    let np = &model.passive_basis.as_slice()[off * d..(off + dim) * d];
+                    combine(hp.row_mut(i), &face[..dim], np);
                 }
                 c0.push(if k + 1 == r {
                     model.min_normal_force[ci]
@@ -454,15 +495,8 @@ impl TorqueQp {
                 let (off, dim) = (block.offset, block.model.dim());
                 let z2 = &self.model.z2.as_slice()[off * m..(off + dim) * m];
                 for k in 0..block.rows {
-                    let hrow = h.row_mut(block.first_row + k);
-                    for t in 0..dim {
-                        let s = face_entry(repr, &block.model, k, t);
-                        if s != 0.0 {
-                            for (x, z) in hrow.iter_mut().zip(&z2[t * m..(t + 1) * m]) {
-                                *x += s * z;
-                            }
-                        }
-                    }
+                    let (face, dim) = face_row(repr, &block.model, k);
+                    combine(h.row_mut(block.first_row + k), &face[..dim], z2);
                 }
             }
             for (i, id) in self.rows.iter().enumerate() {
