@@ -28,7 +28,7 @@
 
 use crate::contact::ContactModel;
 use crate::linalg::{decompose, RankThreshold};
-use crate::matrix::{add_columns, column_major, dot4, norm2, Matrix};
+use crate::matrix::{add_columns, dot4, norm2, write_columns, Matrix};
 use crate::qp::{ConeRepr, RowId, TorqueQp};
 
 /// One block of rows of a [`ConicForm`], in row order.
@@ -104,13 +104,6 @@ pub struct ConicForm {
     bw_cols: Vec<f64>,
 }
 
-/// One affine row `a·x + s = b0 + bw·w`, before assembly.
-struct Row {
-    a: Vec<f64>,
-    b0: f64,
-    bw: [f64; 6],
-}
-
 impl ConicForm {
     /// Assembles the conic problem of `qp` (exact blocks become second-order cones).
     pub fn new(qp: &TorqueQp) -> Self {
@@ -157,9 +150,37 @@ impl ConicForm {
         for j in 0..m {
             col_scale[j] = k * model.weights[j].sqrt();
         }
+        // The rows, assembled in place in their final order (equalities, the view's
+        // linear rows, then each second-order cone's): `a·x + s = b0 + bw·w`.
+        let socs: usize = qp
+            .contacts
+            .iter()
+            .zip(&qp.constraints.cones)
+            .filter(|(_, repr)| matches!(repr, ConeRepr::Exact))
+            .map(|(c, _)| match c.model {
+                ContactModel::Fpc => 0,
+                ContactModel::Pcwf { .. } => 3,
+                ContactModel::SfcElliptic { .. } => 4,
+                ContactModel::SfcLinear { .. } => 6,
+            })
+            .sum();
+        let n = model.equality_rows() + qp.inequality_rows() + socs;
+        let mut data: Vec<f64> = Vec::with_capacity(n * nx);
+        let mut b0: Vec<f64> = Vec::with_capacity(n);
+        let mut bws: Vec<[f64; 6]> = Vec::with_capacity(n);
+        // A new zero row of A, to be filled.
+        let new_row = |data: &mut Vec<f64>| -> usize {
+            let start = data.len();
+            data.resize(start + nx, 0.0);
+            start
+        };
         // A row "v·f + k ≥ 0" (v on force components, already in force units).
-        let force_row = |v: &[(usize, f64)], k: f64| -> Row {
-            let mut a = vec![0.0; nx];
+        let force_row = |data: &mut Vec<f64>,
+                         b0: &mut Vec<f64>,
+                         bws: &mut Vec<[f64; 6]>,
+                         v: &[(usize, f64)]| {
+            let start = new_row(data);
+            let a = &mut data[start..];
             let mut bw = [0.0; 6];
             for &(i, c) in v {
                 for ((aj, z), s) in a.iter_mut().zip(model.z2.row(i)).zip(&col_scale) {
@@ -176,26 +197,31 @@ impl ConicForm {
                     *bj += c * z;
                 }
             }
-            Row { a, b0: k, bw }
+            b0.push(0.0);
+            bws.push(bw);
         };
-        let mut zero = Vec::new();
+        let mut cones = Vec::new();
         for i in 0..model.equality_rows() {
             // C τ = −eq_w w, each row normalised in the scaled variables.
-            let mut a = vec![0.0; nx];
+            let start = new_row(&mut data);
+            let a = &mut data[start..];
             for ((aj, e), s) in a.iter_mut().zip(model.eq.row(i)).zip(&col_scale) {
                 *aj = e / s;
             }
-            let nrm = norm2(&a).max(f64::MIN_POSITIVE);
+            let nrm = norm2(a).max(f64::MIN_POSITIVE);
             a.iter_mut().for_each(|v| *v /= nrm);
             let mut bw = [0.0; 6];
             for (j, v) in bw.iter_mut().enumerate() {
                 *v = -model.eq_w[(i, j)] / nrm;
             }
-            zero.push(Row { a, b0: 0.0, bw });
+            b0.push(0.0);
+            bws.push(bw);
+        }
+        if model.equality_rows() > 0 {
+            cones.push(ConeKind::Zero(model.equality_rows()));
         }
         // The linear rows of the view: −(H τ + Hp ξ) + s = −c0 + hw·w, in force units.
-        let linear_at = zero.len();
-        let mut nonneg = Vec::new();
+        let linear_at = b0.len();
         let mut row_scale = Vec::with_capacity(qp.inequality_rows());
         let h = qp.h();
         for i in 0..qp.inequality_rows() {
@@ -203,7 +229,8 @@ impl ConicForm {
                 RowId::TorqueLimit { joint, .. } => col_scale[joint],
                 _ => 1.0,
             };
-            let mut a = vec![0.0; nx];
+            let start = new_row(&mut data);
+            let a = &mut data[start..];
             for ((aj, h), s) in a.iter_mut().zip(h.row(i)).zip(&col_scale) {
                 *aj = -rho * h / s;
             }
@@ -214,14 +241,13 @@ impl ConicForm {
             for (j, v) in bw.iter_mut().enumerate() {
                 *v = rho * qp.hw[(i, j)];
             }
-            nonneg.push(Row {
-                a,
-                b0: -rho * qp.c0[i],
-                bw,
-            });
+            b0.push(-rho * qp.c0[i]);
+            bws.push(bw);
             row_scale.push(rho);
         }
-        let mut socs: Vec<Vec<Row>> = Vec::new();
+        if qp.inequality_rows() > 0 {
+            cones.push(ConeKind::Nonnegative(qp.inequality_rows()));
+        }
         let mut soc_contacts = Vec::new();
         for (ci, (c, repr)) in qp.contacts.iter().zip(&qp.constraints.cones).enumerate() {
             if !matches!(repr, ConeRepr::Exact) {
@@ -229,69 +255,47 @@ impl ConicForm {
             }
             let o = c.offset;
             let (x, y, z, t) = (o, o + 1, o + 2, o + 3);
+            let mut cone = |rows: &[&[(usize, f64)]]| {
+                for v in rows {
+                    force_row(&mut data, &mut b0, &mut bws, v);
+                }
+                soc_contacts.push(ci);
+                cones.push(ConeKind::SecondOrder(rows.len()));
+            };
             match c.model {
                 // fz ≥ f_min ≥ 0 is already a linear row.
                 ContactModel::Fpc => {}
-                ContactModel::Pcwf { mu } => {
-                    soc_contacts.push(ci);
-                    socs.push(vec![
-                        force_row(&[(z, mu)], 0.0),
-                        force_row(&[(x, 1.0)], 0.0),
-                        force_row(&[(y, 1.0)], 0.0),
-                    ])
-                }
-                ContactModel::SfcElliptic { mu, mu_torsion } => {
-                    soc_contacts.push(ci);
-                    socs.push(vec![
-                        force_row(&[(z, 1.0)], 0.0),
-                        force_row(&[(x, 1.0 / mu)], 0.0),
-                        force_row(&[(y, 1.0 / mu)], 0.0),
-                        force_row(&[(t, 1.0 / mu_torsion)], 0.0),
-                    ])
-                }
+                ContactModel::Pcwf { mu } => cone(&[&[(z, mu)], &[(x, 1.0)], &[(y, 1.0)]]),
+                ContactModel::SfcElliptic { mu, mu_torsion } => cone(&[
+                    &[(z, 1.0)],
+                    &[(x, 1.0 / mu)],
+                    &[(y, 1.0 / mu)],
+                    &[(t, 1.0 / mu_torsion)],
+                ]),
                 // ‖f_t‖/mu + |mz|/mu_torsion ≤ fz is ‖f_t‖ ≤ mu (fz ∓ mz/mu_torsion), both.
                 ContactModel::SfcLinear { mu, mu_torsion } => {
                     for sign in [-1.0, 1.0] {
-                        soc_contacts.push(ci);
-                        socs.push(vec![
-                            force_row(&[(z, mu), (t, sign * mu / mu_torsion)], 0.0),
-                            force_row(&[(x, 1.0)], 0.0),
-                            force_row(&[(y, 1.0)], 0.0),
+                        cone(&[
+                            &[(z, mu), (t, sign * mu / mu_torsion)],
+                            &[(x, 1.0)],
+                            &[(y, 1.0)],
                         ]);
                     }
                 }
             }
         }
-        let mut cones = Vec::new();
-        let mut rows = Vec::new();
-        if !zero.is_empty() {
-            cones.push(ConeKind::Zero(zero.len()));
-            rows.extend(zero);
-        }
-        if !nonneg.is_empty() {
-            cones.push(ConeKind::Nonnegative(nonneg.len()));
-            rows.extend(nonneg);
-        }
-        for soc in socs {
-            cones.push(ConeKind::SecondOrder(soc.len()));
-            rows.extend(soc);
-        }
-        let n = rows.len();
-        let row_span = rows
-            .iter()
-            .map(|r| {
-                let first = r.a.iter().position(|&v| v != 0.0).unwrap_or(0);
-                let last = r.a.iter().rposition(|&v| v != 0.0).map_or(0, |j| j + 1);
+        let n = b0.len();
+        let a = Matrix::from_rows_data(n, nx, data);
+        let row_span = (0..n)
+            .map(|i| {
+                let r = a.row(i);
+                let first = r.iter().position(|&v| v != 0.0).unwrap_or(0);
+                let last = r.iter().rposition(|&v| v != 0.0).map_or(0, |j| j + 1);
                 // Whole blocks of four within the padded width.
                 (first / 4 * 4, last.max(first).div_ceil(4) * 4)
             })
             .collect();
         let padded = nx.div_ceil(4) * 4;
-        let a = Matrix::from_rows_data(
-            n,
-            nx,
-            rows.iter().flat_map(|r| r.a.iter().copied()).collect(),
-        );
         let eq = match cones.first() {
             Some(&ConeKind::Zero(p)) => p,
             _ => 0,
@@ -310,20 +314,34 @@ impl ConicForm {
         } else {
             (None, None)
         };
+        // A and |A| down columns, and A in rows padded to whole blocks of four.
+        let mut a_cols: Vec<f64> = vec![0.0; n * nx];
+        write_columns(&a, &mut a_cols, n);
+        let abs_cols = a_cols.iter().map(|v| v.abs()).collect();
+        let mut bw_cols = vec![0.0; n * 6];
+        for (i, bw) in bws.iter().enumerate() {
+            for (j, v) in bw.iter().enumerate() {
+                bw_cols[j * n + i] = *v;
+            }
+        }
+        let mut a_padded = Matrix::zeros(n, padded);
+        for i in 0..n {
+            a_padded.row_mut(i)[..nx].copy_from_slice(a.row(i));
+        }
         Self {
-            a_cols: column_major(n, nx, |i, j| a[(i, j)]),
-            abs_cols: column_major(n, nx, |i, j| a[(i, j)].abs()),
-            bw_cols: column_major(n, 6, |i, j| rows[i].bw[j]),
+            a_cols,
+            abs_cols,
+            bw_cols,
             nx,
             joints: m,
             free: d,
-            a_padded: Matrix::from_fn(n, padded, |i, j| if j < nx { a[(i, j)] } else { 0.0 }),
+            a_padded,
             a,
             eq_null_t,
             eq_pinv,
             row_span,
-            b0: rows.iter().map(|r| r.b0).collect(),
-            bw: Matrix::from_fn(n, 6, |i, j| rows[i].bw[j]),
+            b0,
+            bw: Matrix::from_rows_data(n, 6, bws.concat()),
             cones,
             col_scale,
             kappa: 1.0 / (k * k),
