@@ -274,6 +274,7 @@ impl LeastDistance<'_> {
                         largest = largest.max(sq);
                     }
                 }
+                // The normal force's row.
                 ConeRepr::Exact => {
                     let n = c.model.normal_index();
                     largest = largest.max(gram[n][n]);
@@ -324,14 +325,6 @@ fn contact_faces(model: &GraspModel, ci: usize, repr: &ConeRepr) -> Matrix {
     }
 }
 
-/// Entry `(k, t)` of a contact's block of S: face k's coefficient of force component t.
-fn face_entry(repr: &ConeRepr, c: &ContactModel, k: usize, t: usize) -> f64 {
-    match repr {
-        ConeRepr::Inscribed(cone) => cone.faces.as_slice()[k * c.dim() + t],
-        ConeRepr::Exact => (t == c.normal_index()) as u8 as f64,
-    }
-}
-
 /// `Σ (a_i d_i)(b_i d_i)` in four independent lanes (a single chain of additions waits
 /// on each one's latency).
 fn scaled_dot(a: &[f64], b: &[f64], d: &[f64]) -> f64 {
@@ -354,12 +347,16 @@ fn scaled_dot(a: &[f64], b: &[f64], d: &[f64]) -> f64 {
     (s[0] + s[1]) + (s[2] + s[3]) + tail
 }
 
-/// Contact `c`'s face row k (at most four entries: `ContactModel::dim`).
+/// Contact `c`'s face row k, its block of S (at most four entries: `ContactModel::dim`):
+/// the inscribed face, or the exact cone's one row, its normal force.
 fn face_row(repr: &ConeRepr, c: &ContactModel, k: usize) -> ([f64; 4], usize) {
     let mut face = [0.0f64; 4];
     let dim = c.dim();
-    for (t, f) in face.iter_mut().enumerate().take(dim) {
-        *f = face_entry(repr, c, k, t);
+    match repr {
+        ConeRepr::Inscribed(cone) => {
+            face[..dim].copy_from_slice(&cone.faces.as_slice()[k * dim..(k + 1) * dim])
+        }
+        ConeRepr::Exact => face[c.normal_index()] = 1.0,
     }
     (face, dim)
 }
@@ -406,18 +403,21 @@ fn block_rows(model: &GraspModel, ci: usize, faces: &Matrix) -> (Matrix, Matrix,
     let off = model.offsets[ci];
     let dim = model.contacts[ci].dim();
     let (m, d) = (model.joints(), model.free_dim());
-    let r = faces.nrows();
     let mul = |src: &Matrix, cols: usize| {
-        Matrix::from_fn(r, cols, |i, j| {
-            (0..dim).map(|k| faces[(i, k)] * src[(off + k, j)]).sum()
-        })
+        let mut out = Matrix::zeros(faces.nrows(), cols);
+        if cols > 0 {
+            let rows = &src.as_slice()[off * cols..(off + dim) * cols];
+            for i in 0..faces.nrows() {
+                combine(out.row_mut(i), faces.row(i), rows);
+            }
+        }
+        out
     };
-    let hp = if d > 0 {
-        mul(&model.passive_basis, d)
-    } else {
-        Matrix::zeros(r, 0)
-    };
-    (mul(&model.z2, m), hp, mul(&model.z1, 6))
+    (
+        mul(&model.z2, m),
+        mul(&model.passive_basis, d),
+        mul(&model.z1, 6),
+    )
 }
 
 impl TorqueQp {
