@@ -2,8 +2,36 @@
 //! with the assembled H, to the rounding of the sums, on every bundled grasp, with
 //! inscribed and exact cones and torque limits; so does the largest scaled row norm.
 
-use grasp_core::{ConeRepr, InequalityRows, Matrix, ModelOptions, TorqueQp};
+use grasp_core::{
+    ConeRepr, ContactBlock, GraspModel, InequalityRows, Matrix, ModelOptions, TorqueQp,
+};
 use grasp_io::load_problem;
+use std::path::Path;
+use std::sync::Arc;
+
+/// A bundled grasp with torque limits on every `every`-th joint (so that limit rows are
+/// covered everywhere), and its inscribed and exact views.
+fn views(path: &Path, every: usize) -> (Arc<GraspModel>, [TorqueQp; 2]) {
+    let mut p = load_problem(path).unwrap();
+    let m = p.jacobian_transpose.nrows();
+    let t = p.transmission.as_ref().map_or(m, |t| t.matrix.ncols());
+    p.torque_limits = Some((0..t).map(|j| (j % every == 0).then_some(5.0)).collect());
+    let model = Arc::new(GraspModel::new(&p, &ModelOptions::default()).unwrap());
+    let qps = [
+        TorqueQp::linearized(model.clone(), &p.linearization),
+        TorqueQp::exact(model.clone()),
+    ];
+    (model, qps)
+}
+
+/// `|S|` of face row r, force component t, of a contact.
+fn face_abs(repr: &ConeRepr, c: &ContactBlock, r: usize, t: usize) -> f64 {
+    match repr {
+        ConeRepr::Inscribed(cone) => cone.faces[(r, t)].abs(),
+        // Exact: the unit normal row (ConeRepr is non-exhaustive).
+        _ => (t == c.model.normal_index()) as u8 as f64,
+    }
+}
 
 #[test]
 fn factored_products_match_the_assembled_rows() {
@@ -11,17 +39,8 @@ fn factored_products_match_the_assembled_rows() {
     assert!(files.len() >= 9, "{files:?}");
     let mut limited = 0;
     for path in &files {
-        let mut p = load_problem(path).unwrap();
-        let m = p.jacobian_transpose.nrows();
-        // Torque limits on every other joint, so limit rows are covered everywhere.
-        let t = p.transmission.as_ref().map_or(m, |t| t.matrix.ncols());
-        p.torque_limits = Some((0..t).map(|j| (j % 2 == 0).then_some(5.0)).collect());
-        let model =
-            std::sync::Arc::new(grasp_core::GraspModel::new(&p, &ModelOptions::default()).unwrap());
-        for qp in [
-            TorqueQp::linearized(model.clone(), &p.linearization),
-            TorqueQp::exact(model.clone()),
-        ] {
+        let (model, qps) = views(path, 2);
+        for qp in qps {
             let ld = qp.least_distance();
             assert!(matches!(ld.h, InequalityRows::Factored(_)));
             let k = qp.joints();
@@ -40,11 +59,7 @@ fn factored_products_match_the_assembled_rows() {
             for (c, repr) in qp.contacts.iter().zip(&qp.constraints.cones) {
                 for r in 0..c.rows {
                     for t in 0..c.model.dim() {
-                        let s = match repr {
-                            ConeRepr::Inscribed(cone) => cone.faces[(r, t)].abs(),
-                            // Exact: the unit normal row (ConeRepr is non-exhaustive).
-                            _ => (t == c.model.normal_index()) as u8 as f64,
-                        };
+                        let s = face_abs(repr, c, r, t);
                         for j in 0..7 {
                             size[(c.first_row + r, j)] += s * zx[(c.offset + t, j)];
                         }
@@ -75,16 +90,8 @@ fn factored_products_match_the_assembled_rows() {
 #[test]
 fn factored_row_norms_match_the_assembled_rows() {
     for path in grasp_testkit::fixture_paths(&["", "hands"]) {
-        let mut p = load_problem(&path).unwrap();
-        let m = p.jacobian_transpose.nrows();
-        let t = p.transmission.as_ref().map_or(m, |t| t.matrix.ncols());
-        p.torque_limits = Some((0..t).map(|j| (j % 3 == 0).then_some(5.0)).collect());
-        let model =
-            std::sync::Arc::new(grasp_core::GraspModel::new(&p, &ModelOptions::default()).unwrap());
-        for qp in [
-            TorqueQp::linearized(model.clone(), &p.linearization),
-            TorqueQp::exact(model.clone()),
-        ] {
+        let (model, qps) = views(&path, 3);
+        for qp in qps {
             let k = qp.joints();
             let d: Vec<f64> = (0..k).map(|j| 10f64.powi((j % 5) as i32 - 2)).collect();
             let fast = qp.least_distance().max_row_norm(&d);
@@ -99,11 +106,7 @@ fn factored_row_norms_match_the_assembled_rows() {
                         .map(|j| {
                             let v: f64 = (0..c.model.dim())
                                 .map(|t| {
-                                    let s = match repr {
-                                        ConeRepr::Inscribed(cone) => cone.faces[(r, t)].abs(),
-                                        _ => (t == c.model.normal_index()) as u8 as f64,
-                                    };
-                                    s * model.z2[(c.offset + t, j)].abs()
+                                    face_abs(repr, c, r, t) * model.z2[(c.offset + t, j)].abs()
                                 })
                                 .sum();
                             (v * d[j]).powi(2)
