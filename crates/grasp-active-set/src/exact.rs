@@ -23,8 +23,9 @@
 //!    certificate-checked the same way (`method: "interior_point"`). A run that fails
 //!    ends `infeasible` when its multipliers have grown along a ray of the dual that
 //!    proves it
-//!    ([`ConicForm::dual_ray`], `Reason::DualRay`), or against finer circumscribed
-//!    polyhedra (`N = 256`, within 8e-5 of the cones).
+//!    ([`ConicForm::dual_ray`], `Reason::DualRay`); else Newton starts from its best
+//!    iterate (`method: "interior_point_newton"` if certified); else the run is tried
+//!    against finer circumscribed polyhedra (`N = 256`, within 8e-5 of the cones).
 //!
 //! A warm solve (`GraspSolver::resolve`) starts Newton from the previous answer and its
 //! pieces, without the inscribed solve; if that fails, Newton follows the wrenches
@@ -467,6 +468,40 @@ impl ExactSolver {
         false
     }
 
+    /// Newton from the interior-point method's best iterate, when the method ended
+    /// short of its tolerances or of the certificate: on an ill-conditioned grasp its
+    /// directions lose their accuracy to rounding as W⁻² spreads, a few digits before
+    /// the end, and its residuals grow again. By then which pieces are active is
+    /// plain (complementarity), and Newton on them converges as from any good guess.
+    /// Its answer is certified from scratch like every other (`method:
+    /// "interior_point_newton"`).
+    fn polish(&mut self, w: &[f64; 6], alpha: f64, out: &mut Solution) -> bool {
+        let Some(ipm) = self.ipm.as_mut() else {
+            return false;
+        };
+        if !ipm.best_merit.is_finite() {
+            return false;
+        }
+        ipm.restore_best();
+        if ipm.is_reduced() {
+            self.newton.lift(&ipm.x, &mut self.ipm_x);
+        } else {
+            self.ipm_x.copy_from_slice(&ipm.x[..self.conic.nx]);
+        }
+        ipm.dual_into(&self.conic, &mut self.dual);
+        if !self
+            .newton
+            .adopt(&self.conic, &self.ipm_x, &self.dual, w, alpha)
+        {
+            return false;
+        }
+        if self.try_newton(w, alpha, true, out) {
+            out.method = Some("interior_point_newton");
+            return true;
+        }
+        false
+    }
+
     /// The interior-point method's last multipliers as a ray of the dual, when they
     /// prove the grasp infeasible ([`ray_of`]).
     fn dual_ray(&mut self, w: &[f64; 6], alpha: f64) -> Option<Reason> {
@@ -649,10 +684,14 @@ impl TorqueSolver for ExactSolver {
         if let Some(reason) = self.dual_ray(w, alpha) {
             return Self::infeasible(out, reason);
         }
+        // (The method's own certificate, for the report: Newton's replaces it.)
+        let c = self.certificate;
+        if self.polish(w, alpha, out) {
+            return;
+        }
         if let Some(reason) = self.outer_infeasible(w, FINE_SIDES) {
             return Self::infeasible(out, reason);
         }
-        let c = self.certificate;
         out.status = match end {
             IpmEnd::IterationLimit => Status::IterationLimit,
             _ => Status::NumericalFailure,

@@ -106,6 +106,9 @@ pub(crate) struct Ipm {
     pub(crate) z: Vec<f64>,
     pub(crate) s: Vec<f64>,
     pub(crate) iterations: usize,
+    /// The lowest merit of the last run (largest relative residual or gap), infinite
+    /// before its first iterate.
+    pub(crate) best_merit: f64,
     /// Whether the variables are `y` of `x = x_p + N y` (the equalities eliminated, no
     /// rows of the zero cone), not the form's x.
     reduced: bool,
@@ -278,12 +281,23 @@ impl Ipm {
             z: vec![0.0; r],
             s: vec![0.0; r],
             iterations: 0,
+            best_merit: f64::INFINITY,
             reduced: is_reduced,
             ws,
         }
     }
 
     /// Whether the solver works on `y` of `x = x_p + N y` ([`Self::reduced`]).
+    /// Takes the best iterate of the last run (the lowest merit seen) as the current
+    /// one: where the method lost its last digits to rounding, it is the closest to
+    /// the optimum.
+    pub(crate) fn restore_best(&mut self) {
+        self.x.copy_from_slice(&self.ws.best_x);
+        self.y.copy_from_slice(&self.ws.best_y);
+        self.z.copy_from_slice(&self.ws.best_z);
+        self.s.copy_from_slice(&self.ws.best_s);
+    }
+
     pub(crate) fn is_reduced(&self) -> bool {
         self.reduced
     }
@@ -339,6 +353,7 @@ impl Ipm {
     ) -> IpmEnd {
         self.load(form, b);
         self.iterations = 0;
+        self.best_merit = f64::INFINITY;
         if !self.initial_point() {
             return IpmEnd::Stalled;
         }
@@ -346,12 +361,10 @@ impl Ipm {
         let bscale = norm_inf(&self.ws.be).max(norm_inf(&self.ws.h)).max(1.0);
         let mut best = f64::INFINITY;
         let end = self.iterate(bscale, &mut best, stop);
+        self.best_merit = best;
         if matches!(end, IpmEnd::IterationLimit | IpmEnd::Stalled) && best <= st.acceptable {
             // Rounding stopped the last digits: the best iterate is the answer.
-            self.x.copy_from_slice(&self.ws.best_x);
-            self.y.copy_from_slice(&self.ws.best_y);
-            self.z.copy_from_slice(&self.ws.best_z);
-            self.s.copy_from_slice(&self.ws.best_s);
+            self.restore_best();
             return IpmEnd::Converged;
         }
         end
