@@ -282,14 +282,15 @@ fn cones_at_their_apex_are_solved_by_newton() {
 /// Ill-conditioned grasps where Newton fails from both polyhedra and the
 /// interior-point method loses its last digits to rounding: its residuals fall to
 /// 1e-9–1e-7, then grow again until its factor breaks down (on the first two the
-/// scaled optimum ‖x‖² is 5e3 and 3e8, against a right-hand side of size 1). All five
+/// scaled optimum ‖x‖² is 5e3 and 3e8, against a right-hand side of size 1). All six
 /// ended `numerical_failure` before. Newton from the method's best iterate converges
-/// on the first three (`interior_point_newton`); on the last two it does not (SFCl
-/// pairs near their apex at a twentieth of the friction), and the best iterate itself
-/// passes the certificate (`interior_point`). Found by sweeps of unseen seeds
-/// (200000..202000 at a quarter and at half the friction, 400000..405000 at a
-/// twentieth) and, seed 17551, an earlier one. Checked against σ(N) of inscribed
-/// polyhedra, which lie inside the cones, and against Clarabel when it is built.
+/// on the first three (`interior_point_newton`); on the last three it does not (SFCl
+/// pairs near their apex at a twentieth of the friction; a grasp no inscribed
+/// polyhedron holds), and the best iterate itself passes the certificate
+/// (`interior_point`). Found by sweeps of unseen seeds (200000..202000 at a quarter
+/// and at half the friction, 400000..405000 at a twentieth) and, seeds 17551 and
+/// 12161, earlier ones. Checked against σ(N) of inscribed polyhedra, which lie inside
+/// the cones, where they hold the grasp, and against Clarabel when it is built.
 #[test]
 fn the_best_interior_point_iterate_finishes_ill_conditioned_grasps() {
     for (seed, friction, method) in [
@@ -298,6 +299,7 @@ fn the_best_interior_point_iterate_finishes_ill_conditioned_grasps() {
         (17551, 0.25, "interior_point_newton"),
         (402841, 0.05, "interior_point"),
         (404279, 0.05, "interior_point"),
+        (12161, 0.25, "interior_point"),
     ] {
         let p = grasp(seed, friction);
         let native = run(&p, Backend::ActiveSet, Cones::Exact);
@@ -310,10 +312,11 @@ fn the_best_interior_point_iterate_finishes_ill_conditioned_grasps() {
         assert_eq!(native.method, Some(method), "seed {seed}");
         let mut fine = p.clone();
         fine.linearization.sides = 256;
+        // (No inscribed polyhedron holds seed 12161.)
         let inscribed = run(&fine, Backend::ActiveSet, Cones::Linear);
-        assert_eq!(inscribed.status, Status::Optimal, "seed {seed}");
+        assert_eq!(inscribed.is_optimal(), seed != 12161, "seed {seed}");
         assert!(
-            native.objective <= inscribed.objective * (1.0 + 1e-9),
+            !inscribed.is_optimal() || native.objective <= inscribed.objective * (1.0 + 1e-9),
             "seed {seed}: {} above σ(256) = {}",
             native.objective,
             inscribed.objective
