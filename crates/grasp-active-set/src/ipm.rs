@@ -396,6 +396,14 @@ impl Ipm {
                 .fold(0.0f64, |a, (x, p)| a.max((p * x).abs()));
             let pres = norm_inf(&self.ws.ry).max(norm_inf(&self.ws.rz)) / bscale;
             let dres = norm_inf(&self.ws.rx) / px.max(1.0);
+            // An iterate that rounding made non-finite is neither an answer nor the best
+            // one (the norms above skip NaN, and its merit would read 0).
+            let finite = [&self.ws.rx, &self.ws.ry, &self.ws.rz]
+                .iter()
+                .all(|r| r.iter().map(|v| v * 0.0).sum::<f64>() == 0.0);
+            if !(finite && gap.is_finite() && pobj.is_finite()) {
+                return IpmEnd::Stalled;
+            }
             if pres <= st.feasibility
                 && dres <= st.feasibility
                 && (gap <= st.gap_abs || gap <= st.gap_rel * pobj)
