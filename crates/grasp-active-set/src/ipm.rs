@@ -287,7 +287,6 @@ impl Ipm {
         }
     }
 
-    /// Whether the solver works on `y` of `x = x_p + N y` ([`Self::reduced`]).
     /// Takes the best iterate of the last run (the lowest merit seen) as the current
     /// one: where the method lost its last digits to rounding, it is the closest to
     /// the optimum.
@@ -298,6 +297,7 @@ impl Ipm {
         self.s.copy_from_slice(&self.ws.best_s);
     }
 
+    /// Whether the solver works on `y` of `x = x_p + N y` ([`Self::reduced`]).
     pub(crate) fn is_reduced(&self) -> bool {
         self.reduced
     }

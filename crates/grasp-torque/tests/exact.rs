@@ -291,8 +291,9 @@ fn cones_at_their_apex_are_solved_by_newton() {
 /// iterate turned NaN after a best merit of 4e-11, and the NaN iterate, whose norms
 /// read 0, was taken for the best. Found by sweeps of unseen seeds (200000..202000 at
 /// a quarter and at half the friction, 400000..405000 at a twentieth, 500000..502000
-/// at a hundredth) and, seeds 17551 and 12161, earlier ones. Checked against σ(N) of inscribed polyhedra, which lie inside
-/// the cones, where they hold the grasp, and against Clarabel when it is built.
+/// at a hundredth) and, seeds 17551 and 12161, earlier ones. Checked against σ(N) of
+/// inscribed polyhedra, which lie inside the cones, where they hold the grasp, and
+/// against Clarabel when it is built.
 #[test]
 fn the_best_interior_point_iterate_finishes_ill_conditioned_grasps() {
     for (seed, friction, method) in [
