@@ -18,11 +18,15 @@
 //! control loop per grasp (`resolve`, the wrench alternating with the one CHANGE
 //! away, 0.01 by default, as `grasp-torque bench` nudges it) and prints each tick's
 //! status, method and σ; `… -- loop SEED:FRICTION N` runs N such ticks silently, for
-//! instruction counts (valgrind).
+//! instruction counts (valgrind). `… -- units SEED:FRICTION...` solves each grasp in
+//! SI units, in millimetres, in millinewtons, both ways and with the wrench scaled by
+//! 1e6 and 1e-6, and prints each status, method and σ's relative difference from the
+//! SI answer scaled.
 
 use grasp_testkit::sweep_grasp;
 use grasp_torque::{
-    solve_into, Backend, Cones, GraspSolver, Reason, Solution, SolverConfig, WarmStart,
+    solve_into, Backend, Cones, GraspProblem, GraspSolver, Reason, Solution, SolverConfig,
+    WarmStart,
 };
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -49,10 +53,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         Some("time") => {
             for arg in &args[1..] {
-                let (seed, friction) = arg
-                    .split_once(':')
-                    .ok_or_else(|| format!("{arg}: expected SEED:FRICTION"))?;
-                let p = sweep_grasp(seed.parse()?, friction.parse()?);
+                let p = named_grasp(arg)?;
                 let mut s = config.build(config.qp(&p)?)?;
                 let mut out = Solution::default();
                 let cold = best_of(5, 200, || {
@@ -148,24 +149,68 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let [grasp, n] = &args[1..] else {
                 return Err("usage: fallbacks loop SEED:FRICTION N".into());
             };
-            let (seed, friction) = grasp
-                .split_once(':')
-                .ok_or_else(|| format!("{grasp}: expected SEED:FRICTION"))?;
-            let p = sweep_grasp(seed.parse()?, friction.parse()?);
+            let p = named_grasp(grasp)?;
             let w = [p.wrench, nudged(&p.wrench, 0.01)];
             let mut ctl = GraspSolver::new(&p, &config)?;
             for tick in 0..n.parse::<usize>()? {
                 std::hint::black_box(ctl.resolve(&w[tick % 2])?.status);
             }
         }
+        Some("units") => {
+            let solve = |p: &GraspProblem| -> Result<Solution, Box<dyn std::error::Error>> {
+                let mut s = config.build(config.qp(p)?)?;
+                let mut out = Solution::default();
+                solve_into(s.as_mut(), &p.wrench, &WarmStart::default(), &mut out)?;
+                Ok(out)
+            };
+            for arg in &args[1..] {
+                let p = named_grasp(arg)?;
+                let si = solve(&p)?;
+                let mut line = format!("{arg} {}/{}", si.status, si.method.unwrap_or("none"));
+                // Millimetres, millinewtons, both ways, and the wrench scaled: σ scales
+                // by (l f w)².
+                for (l, f, w) in [
+                    (1e3, 1.0, 1.0),
+                    (1.0, 1e3, 1.0),
+                    (1e-3, 1e3, 1.0),
+                    (1.0, 1.0, 1e6),
+                    (1.0, 1.0, 1e-6),
+                ] {
+                    let mut q = grasp_testkit::rescale(&p, l, f);
+                    q.wrench.iter_mut().for_each(|v| *v *= w);
+                    let r = solve(&q)?;
+                    let want = si.objective * (l * f * w).powi(2);
+                    let diff = if si.is_optimal() && r.is_optimal() {
+                        let d = (r.objective - want).abs() / want.abs().max(r.objective.abs());
+                        format!("{d:.1e}")
+                    } else {
+                        "-".into()
+                    };
+                    line += &format!(
+                        " | l={l:e} f={f:e} w={w:e} {}/{} {diff}",
+                        r.status,
+                        r.method.unwrap_or("none")
+                    );
+                }
+                println!("{line}");
+            }
+        }
         _ => {
             return Err(
-                "usage: fallbacks list | time SEED:FRICTION... | sweep FROM TO FRICTION [clarabel | sides=N] | ticks FROM TO FRICTION [CHANGE] | loop SEED:FRICTION N"
+                "usage: fallbacks list | time SEED:FRICTION... | sweep FROM TO FRICTION [clarabel | sides=N] | ticks FROM TO FRICTION [CHANGE] | loop SEED:FRICTION N | units SEED:FRICTION..."
                     .into(),
             )
         }
     }
     Ok(())
+}
+
+/// The sweep grasp named `SEED:FRICTION`.
+fn named_grasp(arg: &str) -> Result<GraspProblem, Box<dyn std::error::Error>> {
+    let (seed, friction) = arg
+        .split_once(':')
+        .ok_or_else(|| format!("{arg}: expected SEED:FRICTION"))?;
+    Ok(sweep_grasp(seed.parse()?, friction.parse()?))
 }
 
 /// The wrench `change` away, as `grasp-torque bench` nudges it: forces up, moments
