@@ -55,6 +55,11 @@ const APEX: f64 = 1e-9;
 const ADOPT: f64 = 1e-6;
 /// A boundary piece this close to its apex during Newton's method is put at the apex.
 const NEAR_APEX: f64 = 1e-6;
+/// A line along y within this of a cone's boundary direction (`|d0² − ‖d1‖²|` against
+/// `‖d‖²`) is left to the general path: where it meets the cone, rounding decides.
+const LINE_PARALLEL: f64 = 1e-10;
+/// The largest answer the closed form gives (see [`Newton::solve_line`]).
+const LINE_LIMIT: f64 = 6.7e7;
 /// A row of a cone at its apex whose part independent of the constraints before it is
 /// below this, relative to the row (or to the largest row, for a row the iterate
 /// barely moves), is left out.
@@ -138,6 +143,9 @@ pub(crate) struct Newton {
     /// Each row's ℓ1 norm in `a_red`: `|a·dx| ≤ ‖a‖₁ ‖dx‖∞` bounds a slack's change
     /// without the product.
     a_red_l1: Vec<f64>,
+    /// With at most one free direction, the rounding level of each row's `a_red`:
+    /// a slope below it is no slope ([`Self::solve_line`]).
+    line_floor: Vec<f64>,
     /// Rows `eq..` of `a_red` column-major, for the pass over every slack.
     a_red_cols: Vec<f64>,
     /// `b − A x_p` and `x_p` are affine in the wrench, like b: their constant and
@@ -246,6 +254,17 @@ impl Newton {
         {
             add_column_block(col, form.a_cols(), rows, eq, x, -1.0);
         }
+        // With one free direction at most, each row's slope along it to rounding:
+        // A N's entries carry errors up to about nx ε ‖A_i‖₁ (N's entries are at most 1).
+        let line_floor = if k <= 1 {
+            (0..rows)
+                .map(|i| {
+                    n as f64 * f64::EPSILON * form.a.row(i).iter().map(|v| v.abs()).sum::<f64>()
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         let n = k;
         let ncmax = (orth.1 - orth.0) + socs.iter().map(|&(_, d)| d).sum::<usize>();
         // SFCl's two cones are consecutive, and the only ones of their contact.
@@ -268,6 +287,7 @@ impl Newton {
                 .map(|i| a_red.row(i).iter().map(|v| v.abs()).sum())
                 .collect(),
             a_red,
+            line_floor,
             b_red: vec![0.0; rows],
             xp: vec![0.0; form.nx],
             y: vec![0.0; k],
@@ -690,6 +710,202 @@ impl Newton {
         x.copy_from_slice(&self.xp);
         add_columns(x, self.null_basis_t.as_slice(), &self.y, 1.0);
         self.dual();
+    }
+
+    /// Whether the equalities leave at most one free direction (`k ≤ 1`), where
+    /// [`Self::solve_line`] applies.
+    /// The free directions the equalities leave (k).
+    #[cfg(test)]
+    pub(crate) fn free_directions(&self) -> usize {
+        self.n
+    }
+
+    pub(crate) fn is_line(&self) -> bool {
+        self.n <= 1 && self.null_basis.nrows() == self.xp.len()
+    }
+
+    /// The problem when the equalities leave at most one free direction (a hand whose
+    /// consistency rows fix all but one combination of its torques), in closed form.
+    /// Along y each slack is affine, `s(y) = c + d y`: a row admits a half-line, a cone
+    /// the interval where the line crosses it (between or beyond the roots of
+    /// `s0² − ‖s1‖²`, a quadratic in y). The least y² is 0 clamped to their
+    /// intersection, and the piece that clamps it carries the only multiplier, from
+    /// stationarity `2y = dᵀz`. Into `x` and `z` for the caller's certificate; false
+    /// where this cannot decide (an empty or ambiguous intersection, a line along a
+    /// cone's boundary, a multiplier of the wrong sign), for the general path.
+    pub(crate) fn solve_line(&mut self, form: &ConicForm, w: &[f64; 6], alpha: f64) -> bool {
+        if !self.is_line() || form.free > 0 {
+            return false;
+        }
+        self.set_wrench(w, alpha);
+        self.frozen = None;
+        self.iterations = 0;
+        // d = −(A N), the slacks' change along y (none without a free direction).
+        let a = if self.n == 1 {
+            self.a_red.as_slice()
+        } else {
+            &[]
+        };
+        let floor = &self.line_floor;
+        let slope = |i: usize| match a.get(i) {
+            Some(v) if v.abs() > floor[i] => -v,
+            _ => 0.0,
+        };
+        let c = &self.b_red;
+        // Each end of the intersection, and the piece that sets it.
+        let (mut lo, mut hi) = ((f64::NEG_INFINITY, None), (f64::INFINITY, None));
+        for i in self.orth.0..self.orth.1 {
+            let d = slope(i);
+            if d == 0.0 {
+                if c[i] < 0.0 {
+                    return false;
+                }
+                continue;
+            }
+            let v = -c[i] / d;
+            if d > 0.0 && v > lo.0 {
+                lo = (v, Some(Owner::Row(i)));
+            } else if d < 0.0 && v < hi.0 {
+                hi = (v, Some(Owner::Row(i)));
+            }
+        }
+        for (k, &(start, dim)) in self.socs.iter().enumerate() {
+            let (c, mut d) = (&c[start..start + dim], [0.0; MAX_TAIL + 1]);
+            for (dj, i) in d.iter_mut().zip(start..start + dim) {
+                *dj = slope(i);
+            }
+            let d = &d[..dim];
+            // s0² − ‖s1‖² = qa y² + 2 qb y + qc.
+            let tail = |u: &[f64], v: &[f64]| -> f64 {
+                u[1..].iter().zip(&v[1..]).map(|(a, b)| a * b).sum()
+            };
+            let (dd, cd, cc) = (tail(d, d), tail(c, d), tail(c, c));
+            let (qa, qb, qc) = (d[0] * d[0] - dd, c[0] * d[0] - cd, c[0] * c[0] - cc);
+            let size = d[0] * d[0] + dd;
+            if size == 0.0 {
+                // The cone does not move with y.
+                if soc_excess(c[0], &c[1..]) > 0.0 {
+                    return false;
+                }
+                continue;
+            }
+            // (A line near the boundary's direction meets it where rounding decides.)
+            if qa.abs() <= LINE_PARALLEL * size {
+                return false;
+            }
+            let disc = qb * qb - qa * qc;
+            if qa < 0.0 && disc < 0.0 {
+                return false;
+            }
+            // The roots without cancellation.
+            let q = -(qb + disc.max(0.0).sqrt().copysign(qb));
+            let (r1, r2) = if q == 0.0 {
+                (0.0, 0.0)
+            } else {
+                let (u, v) = (q / qa, qc / q);
+                (u.min(v), u.max(v))
+            };
+            let owner = Some(Owner::Cone(k));
+            if qa > 0.0 {
+                // d inside K or −K: the line stays in the cone past one root.
+                if d[0] > 0.0 && r2 > lo.0 {
+                    lo = (r2, owner);
+                } else if d[0] < 0.0 && r1 < hi.0 {
+                    hi = (r1, owner);
+                }
+            } else {
+                // Between the roots, on K or on −K.
+                if c[0] + d[0] * 0.5 * (r1 + r2) < 0.0 {
+                    return false;
+                }
+                if r1 > lo.0 {
+                    lo = (r1, owner);
+                }
+                if r2 < hi.0 {
+                    hi = (r2, owner);
+                }
+            }
+        }
+        if lo.0 > hi.0 {
+            return false;
+        }
+        let (mut y, by) = if lo.0 > 0.0 {
+            lo
+        } else if hi.0 < 0.0 {
+            hi
+        } else {
+            (0.0, None)
+        };
+        // Torques beyond 1/√ε times the load (the scaled right-hand side has size 1):
+        // the slacks' rounding, ε |A| |x|, would pass for feasibility.
+        if y.abs() > LINE_LIMIT {
+            return false;
+        }
+        self.z.iter_mut().for_each(|v| *v = 0.0);
+        let nu = match by {
+            Some(Owner::Row(i)) => {
+                let nu = 2.0 * y / slope(i);
+                self.z[i] = nu;
+                nu
+            }
+            Some(Owner::Cone(k)) => {
+                let (start, dim) = self.socs[k];
+                let c = &self.b_red[start..start + dim];
+                let mut d = [0.0; MAX_TAIL + 1];
+                for (dj, i) in d.iter_mut().zip(start..start + dim) {
+                    *dj = slope(i);
+                }
+                let d = &d[..dim];
+                let mut s = [0.0; MAX_TAIL + 1];
+                let at = |y: f64, s: &mut [f64; MAX_TAIL + 1]| {
+                    for ((s, c), d) in s.iter_mut().zip(c).zip(d) {
+                        *s = c + d * y;
+                    }
+                    soc_norm(&s[1..dim])
+                };
+                // Newton on s0 − ‖s1‖ = 0 from the root: the formula is only as
+                // accurate as its coefficients' cancellation allows.
+                for _ in 0..2 {
+                    let r = at(y, &mut s);
+                    let slope_g = d[0]
+                        - s[1..dim]
+                            .iter()
+                            .zip(&d[1..])
+                            .map(|(s, d)| s * d)
+                            .sum::<f64>()
+                            / r;
+                    let step = (s[0] - r) / slope_g;
+                    if !(r > 0.0 && step.is_finite()) {
+                        break;
+                    }
+                    y -= step;
+                }
+                let r = at(y, &mut s);
+                // At the apex (a force that must vanish) the multiplier's direction is
+                // not s1's: the general path's apex piece decides.
+                if r <= APEX * (norm_inf(c) + norm_inf(d) * y.abs()) {
+                    return false;
+                }
+                // z = ν (1, −u), u = s1/‖s1‖.
+                let z = &mut self.z[start..start + dim];
+                z[0] = 1.0;
+                for (zj, v) in z[1..].iter_mut().zip(&s[1..dim]) {
+                    *zj = -v / r;
+                }
+                let nu = 2.0 * y / d.iter().zip(z.iter()).map(|(d, z)| d * z).sum::<f64>();
+                z.iter_mut().for_each(|v| *v *= nu);
+                nu
+            }
+            _ => 0.0,
+        };
+        if !(nu >= 0.0 && nu.is_finite()) {
+            return false;
+        }
+        self.y.iter_mut().for_each(|v| *v = y);
+        let x = &mut self.x[..form.nx];
+        x.copy_from_slice(&self.xp);
+        add_columns(x, self.null_basis_t.as_slice(), &self.y, 1.0);
+        true
     }
 
     /// Cone k leaves its apex, its dual outside the dual cone: to the boundary, along
@@ -1316,8 +1532,9 @@ impl Newton {
                     nc += 1;
                     continue;
                 }
+                let inv_r = 1.0 / r;
                 for j in 1..dim {
-                    let u = s1[j - 1] / r;
+                    let u = s1[j - 1] * inv_r;
                     for (c, a) in row.iter_mut().zip(self.a_red.row(start + j)) {
                         *c -= u * a;
                     }
@@ -1330,46 +1547,45 @@ impl Newton {
                 }
                 // (ν/r) A1ᵀ (I − uuᵀ) A1 as a sum of squares, positive semidefinite by
                 // construction (G − v vᵀ with G = A1ᵀA1 cancels: with ν/r large it lost
-                // the positive definiteness of H to rounding). The reflector
+                // the positive definiteness of H to rounding). In the plane (a tail of two),
+                // I − uuᵀ = v vᵀ with v = (−u2, u1). Longer tails: the reflector
                 // Q = I − 2 q qᵀ, q ∝ u ± e1, maps u to ∓e1, so its columns Q e_j,
                 // j ≥ 1, are an orthonormal basis of u⊥ and I − uuᵀ = Σ_j Q e_j (Q e_j)ᵀ;
                 // A1ᵀ Q e_j = a_j − 2 q_j m with m = Σ_i q_i a_i.
-                let c = nu / r;
+                let c = nu * inv_r;
                 let tail = dim - 1;
+                let a1 = &self.a_red.as_slice()[(start + 1) * n..(start + dim) * n];
+                let g = &mut self.dx[..n];
+                if tail == 2 {
+                    let (v1, v2) = (-s1[1] * inv_r, s1[0] * inv_r);
+                    for ((g, a), b) in g.iter_mut().zip(&a1[..n]).zip(&a1[n..]) {
+                        *g = v1 * a + v2 * b;
+                    }
+                    add_square(&mut self.h, n, c, g);
+                    continue;
+                }
                 let mut q = [0.0; MAX_TAIL];
                 let q = &mut q[..tail];
                 for (qi, si) in q.iter_mut().zip(s1) {
-                    *qi = si / r;
+                    *qi = si * inv_r;
                 }
                 let sign = if q[0] >= 0.0 { 1.0 } else { -1.0 };
                 q[0] += sign;
-                let qn = soc_norm(q);
-                q.iter_mut().for_each(|v| *v /= qn);
+                let inv_qn = 1.0 / soc_norm(q);
+                q.iter_mut().for_each(|v| *v *= inv_qn);
                 let m = &mut self.t[..n];
                 m.iter_mut().for_each(|x| *x = 0.0);
-                for (qi, row) in q
-                    .iter()
-                    .zip(self.a_red.as_slice()[(start + 1) * n..].chunks_exact(n))
-                {
+                for (qi, row) in q.iter().zip(a1.chunks_exact(n)) {
                     for (x, a) in m.iter_mut().zip(row) {
                         *x += qi * a;
                     }
                 }
-                for (j, row) in self.a_red.as_slice()[(start + 2) * n..(start + dim) * n]
-                    .chunks_exact(n)
-                    .enumerate()
-                {
+                for (j, row) in a1[n..].chunks_exact(n).enumerate() {
                     let f = 2.0 * q[j + 1];
-                    let g = &mut self.dx[..n];
                     for ((g, a), m) in g.iter_mut().zip(row).zip(&*m) {
                         *g = a - f * m;
                     }
-                    for (hrow, gi) in self.h.chunks_exact_mut(n).zip(&*g) {
-                        let cg = c * gi;
-                        for (h, gj) in hrow.iter_mut().zip(&*g) {
-                            *h += cg * gj;
-                        }
-                    }
+                    add_square(&mut self.h, n, c, g);
                 }
             }
             if apex {
@@ -1506,6 +1722,17 @@ impl Newton {
             }
         }
         Step::Failed
+    }
+}
+
+/// `h += c g gᵀ` on the row-major n × n `h` (whole rows: at these sizes the lower
+/// triangle's uneven rows cost more than they save).
+fn add_square(h: &mut [f64], n: usize, c: f64, g: &[f64]) {
+    for (hrow, gi) in h.chunks_exact_mut(n).zip(g) {
+        let cg = c * gi;
+        for (h, gj) in hrow.iter_mut().zip(g) {
+            *h += cg * gj;
+        }
     }
 }
 
