@@ -789,8 +789,9 @@ impl Newton {
                 }
                 continue;
             }
-            // (A line near the boundary's direction meets it where rounding decides.)
-            if qa.abs() <= LINE_PARALLEL * size {
+            // (A line near the boundary's direction meets it where rounding decides; and
+            // coefficients out of range decide nothing.)
+            if qa.abs() <= LINE_PARALLEL * size || ![qa, qb, qc].iter().all(|v| v.is_finite()) {
                 return false;
             }
             let disc = qb * qb - qa * qc;
