@@ -379,28 +379,12 @@ impl ExactSolver {
     /// Checks Newton's converged answer from scratch; if it passes, fills `out` and
     /// keeps the answer for a warm solve.
     fn certify(&mut self, w: &[f64; 6], alpha: f64, out: &mut Solution) -> bool {
-        self.certificate = self.conic.certificate(
-            &self.b,
-            &self.newton.x,
-            &self.newton.z,
-            CERTIFICATE_TOLERANCE,
-            &mut self.scratch,
-        );
-        if !self.certificate.passed {
+        if !self.accept_newton(alpha, "newton", out) {
             self.hot = None;
             return false;
         }
-        out.status = Status::Optimal;
-        out.method = Some("newton");
-        self.conic.unscale_into(
-            &self.newton.x,
-            alpha,
-            &mut out.torque,
-            &mut out.internal_forces,
-        );
         (self.hot, self.hot_wrench) = (Some(alpha), *w);
         self.keep_answer();
-        (self.adopted, self.adopt) = (false, true);
         true
     }
 
@@ -409,9 +393,18 @@ impl ExactSolver {
     /// (`method: "closed_form"`). It is no start for a warm Newton solve: the next
     /// solve takes the closed form again, or the cold path.
     fn solve_line(&mut self, w: &[f64; 6], alpha: f64, out: &mut Solution) -> bool {
-        if !self.newton.solve_line(&self.conic, w, alpha) {
+        if !(self.newton.solve_line(&self.conic, w, alpha)
+            && self.accept_newton(alpha, "closed_form", out))
+        {
             return false;
         }
+        self.hot = None;
+        true
+    }
+
+    /// The certificate of Newton's `x` and `z` ([`ConicForm::certificate`]); if they
+    /// pass, fills `out` as optimal by `method`.
+    fn accept_newton(&mut self, alpha: f64, method: &'static str, out: &mut Solution) -> bool {
         self.certificate = self.conic.certificate(
             &self.b,
             &self.newton.x,
@@ -423,14 +416,13 @@ impl ExactSolver {
             return false;
         }
         out.status = Status::Optimal;
-        out.method = Some("closed_form");
+        out.method = Some(method);
         self.conic.unscale_into(
             &self.newton.x,
             alpha,
             &mut out.torque,
             &mut out.internal_forces,
         );
-        self.hot = None;
         (self.adopted, self.adopt) = (false, true);
         true
     }
