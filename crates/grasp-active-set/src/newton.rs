@@ -790,12 +790,9 @@ impl Newton {
                 continue;
             }
             // (A line near the boundary's direction meets it where rounding decides; and
-            // coefficients out of range decide nothing.)
-            if qa.abs() <= LINE_PARALLEL * size || ![qa, qb, qc].iter().all(|v| v.is_finite()) {
-                return false;
-            }
+            // coefficients out of range, where `disc` is not finite, decide nothing.)
             let disc = qb * qb - qa * qc;
-            if qa < 0.0 && disc < 0.0 {
+            if qa.abs() <= LINE_PARALLEL * size || !disc.is_finite() || (qa < 0.0 && disc < 0.0) {
                 return false;
             }
             // The roots without cancellation.
@@ -1454,6 +1451,10 @@ impl Newton {
         // Only a cone that left its apex can be held to a tangent plane.
         let left_apex = self.left_apex.contains(&true);
         self.tangent.iter_mut().for_each(|t| *t = false);
+        // Whether Newton converged on the tangent planes, and the cones' own boundaries
+        // took over from there, near their apex or not: an optimum that near the apex
+        // (a contact barely loaded) would otherwise keep the planes to the end.
+        let mut released = false;
         for it in 0..MAX_NEWTON {
             self.iterations += 1;
             if !self.slacks_at_y {
@@ -1508,7 +1509,7 @@ impl Newton {
                 if left_apex {
                     self.tangent[k] = tangent;
                 }
-                if !tangent && (r <= 1e-12 * (self.s[start].abs() + r) || near) {
+                if !tangent && (r <= 1e-12 * (self.s[start].abs() + r) || (near && !released)) {
                     // At the apex g is not differentiable; near it, its curvature ν/r
                     // grows without bound and Newton crawls; and from s in −K (past the
                     // apex) the nearest point of the cone is the apex.
@@ -1704,6 +1705,13 @@ impl Newton {
                 if (negative || outside) && (alpha == 1.0 || !apex) {
                     return Step::Negative;
                 }
+            }
+            // Converged on a plane, with the guess's multipliers right: on to the cones'
+            // own boundaries (a point of a plane is outside its cone by ‖s1‖ − uᵀs1).
+            if full_step <= 1e-10 * scale && tangent && !released {
+                released = true;
+                self.tangent.iter_mut().for_each(|t| *t = false);
+                continue;
             }
             // Settling quadratically (a full step a twentieth of the last or less): the
             // factors would barely change, so the rest is chord steps on these
