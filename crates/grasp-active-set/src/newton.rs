@@ -712,14 +712,14 @@ impl Newton {
         self.dual();
     }
 
-    /// Whether the equalities leave at most one free direction (`k ≤ 1`), where
-    /// [`Self::solve_line`] applies.
     /// The free directions the equalities leave (k).
     #[cfg(test)]
     pub(crate) fn free_directions(&self) -> usize {
         self.n
     }
 
+    /// Whether the equalities leave at most one free direction (`k ≤ 1`), where
+    /// [`Self::solve_line`] applies.
     pub(crate) fn is_line(&self) -> bool {
         self.n <= 1 && self.null_basis.nrows() == self.xp.len()
     }
@@ -751,6 +751,16 @@ impl Newton {
             Some(v) if v.abs() > floor[i] => -v,
             _ => 0.0,
         };
+        // Cone k's slopes.
+        let socs = &self.socs;
+        let cone_slope = |k: usize| {
+            let (start, dim) = socs[k];
+            let mut d = [0.0; MAX_TAIL + 1];
+            for (dj, i) in d.iter_mut().zip(start..start + dim) {
+                *dj = slope(i);
+            }
+            d
+        };
         let c = &self.b_red;
         // Each end of the intersection, and the piece that sets it.
         let (mut lo, mut hi) = ((f64::NEG_INFINITY, None), (f64::INFINITY, None));
@@ -769,11 +779,8 @@ impl Newton {
                 hi = (v, Some(Owner::Row(i)));
             }
         }
-        for (k, &(start, dim)) in self.socs.iter().enumerate() {
-            let (c, mut d) = (&c[start..start + dim], [0.0; MAX_TAIL + 1]);
-            for (dj, i) in d.iter_mut().zip(start..start + dim) {
-                *dj = slope(i);
-            }
+        for (k, &(start, dim)) in socs.iter().enumerate() {
+            let (c, d) = (&c[start..start + dim], cone_slope(k));
             let d = &d[..dim];
             // s0² − ‖s1‖² = qa y² + 2 qb y + qc.
             let tail = |u: &[f64], v: &[f64]| -> f64 {
@@ -847,12 +854,8 @@ impl Newton {
                 nu
             }
             Some(Owner::Cone(k)) => {
-                let (start, dim) = self.socs[k];
-                let c = &self.b_red[start..start + dim];
-                let mut d = [0.0; MAX_TAIL + 1];
-                for (dj, i) in d.iter_mut().zip(start..start + dim) {
-                    *dj = slope(i);
-                }
+                let (start, dim) = socs[k];
+                let (c, d) = (&c[start..start + dim], cone_slope(k));
                 let d = &d[..dim];
                 let mut s = [0.0; MAX_TAIL + 1];
                 let at = |y: f64, s: &mut [f64; MAX_TAIL + 1]| {
