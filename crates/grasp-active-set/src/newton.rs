@@ -731,8 +731,10 @@ impl Newton {
     /// `s0² − ‖s1‖²`, a quadratic in y). The least y² is 0 clamped to their
     /// intersection, and the piece that clamps it carries the only multiplier, from
     /// stationarity `2y = dᵀz`. Into `x` and `z` for the caller's certificate; false
-    /// where this cannot decide (an empty or ambiguous intersection, a line along a
-    /// cone's boundary, a multiplier of the wrong sign), for the general path.
+    /// where this cannot decide, for the general path: an empty intersection (an
+    /// infeasible grasp, which the general path proves), a line along a cone's
+    /// boundary direction, the clamping cone at its apex, coefficients out of range,
+    /// an answer beyond [`LINE_LIMIT`], a multiplier of the wrong sign.
     pub(crate) fn solve_line(&mut self, form: &ConicForm, w: &[f64; 6], alpha: f64) -> bool {
         if !self.is_line() || form.free > 0 {
             return false;
