@@ -1,6 +1,6 @@
 //! The scale sweep of issue 14: on every bundled fixture, the wrench scaled by 10^k for
 //! k in −9…9 and lengths in m, mm and km, every backend and both cone kinds (the
-//! native exact solver's closed form, Newton and fallbacks among them) agree with
+//! native exact solver's closed form and its Newton method among them) agree with
 //! the unscaled answer (σ scales by (α l)², exactly up to each backend's accuracy),
 //! and exact cones are never infeasible where an inscribed linearisation is feasible.
 #![cfg(all(feature = "active-set", feature = "clarabel"))]
