@@ -1,7 +1,7 @@
 //! A proptest-based fuzzer (cargo-fuzz needs a nightly toolchain, which this project
 //! does not assume). Two targets, each from fixed seeds so CI and every developer see
 //! the same cases; `GRASP_FUZZ_CASES` raises the case count for a longer run
-//! (`.ci/run` runs a time-bounded one in release).
+//! (`.ci/run` runs a time-bounded one).
 //!
 //! - **The parser**: mutations of the bundled fixtures and of the corpus of hostile
 //!   inputs in `fixtures/fuzz/` (bytes flipped, cut or inserted; numbers replaced by
@@ -10,11 +10,15 @@
 //!   twelve orders of magnitude, every contact model, friction at the domain's ends).
 //!   No panic, every reported number finite, and `optimal` implies residuals that an
 //!   independent recomputation confirms.
+//!
+//! Both solve with every backend and cone kind (the native exact solver among them),
+//! cold and then as a control loop does: `resolve` on the wrench 1 % away and back,
+//! through the hot starts.
 #![cfg(all(feature = "active-set", feature = "clarabel"))]
 
 use grasp_torque::{
-    matrix::Matrix, solve, Backend, Cones, ContactModel, GraspProblem, GraspSolver, SolverConfig,
-    WarmStart,
+    matrix::Matrix, solve, Backend, Cones, ContactModel, GraspProblem, GraspSolver, Solution,
+    SolverConfig, WarmStart,
 };
 use proptest::prelude::*;
 
@@ -47,10 +51,12 @@ const EXTREMES: [&str; 12] = [
     "3",
 ];
 
-/// Solves with every backend and cone kind; checks the contract.
+/// Solves with every backend and cone kind, cold and then in a control loop; checks
+/// the contract.
 fn check_solves(p: &GraspProblem) {
     for (backend, cones) in [
         (Backend::ActiveSet, Cones::Linear),
+        (Backend::ActiveSet, Cones::Exact),
         (Backend::Clarabel, Cones::Linear),
         (Backend::Clarabel, Cones::Exact),
     ] {
@@ -62,54 +68,69 @@ fn check_solves(p: &GraspProblem) {
         let Ok(mut solver) = GraspSolver::new(p, &config) else {
             continue;
         };
-        let Ok(s) = solver.solve(&p.wrench, &WarmStart::default()) else {
-            continue;
-        };
-        assert!(
-            s.objective.is_finite(),
-            "{backend}/{cones}: σ {}",
-            s.objective
-        );
-        assert!(s
-            .torque
+        // The cold solve, then a control loop's hot path: `resolve` on the wrench
+        // 1 % away (forces up, moments down) and back.
+        let near: [f64; 6] = std::array::from_fn(|i| p.wrench[i] * if i < 3 { 1.01 } else { 0.99 });
+        for (tick, w) in [p.wrench, near, p.wrench].iter().enumerate() {
+            let answer = if tick == 0 {
+                solver.solve(w, &WarmStart::default())
+            } else {
+                solver.resolve(w)
+            };
+            let Ok(s) = answer else {
+                break;
+            };
+            check_answer(p, backend, cones, w, s);
+        }
+    }
+}
+
+/// No number that is not finite; `optimal` holds the object, by a recomputation.
+fn check_answer(p: &GraspProblem, backend: Backend, cones: Cones, wrench: &[f64; 6], s: &Solution) {
+    assert!(
+        s.objective.is_finite(),
+        "{backend}/{cones}: σ {}",
+        s.objective
+    );
+    assert!(s
+        .torque
+        .iter()
+        .chain(&s.contact_forces)
+        .all(|v| v.is_finite()));
+    if s.is_optimal() {
+        // Recompute ‖G f − w‖ from scratch, relative to the problem's scale: the
+        // largest contact force (mz as mz/mu_torsion) seen through the row.
+        let g = &p.grasp_matrix;
+        let mut unit = Vec::new();
+        for c in &p.contacts {
+            unit.extend((0..c.dim()).map(|k| match (c, k) {
+                (
+                    ContactModel::SfcLinear { mu_torsion, .. }
+                    | ContactModel::SfcElliptic { mu_torsion, .. },
+                    3,
+                ) => *mu_torsion,
+                _ => 1.0,
+            }));
+        }
+        let fmax = s
+            .contact_forces
             .iter()
-            .chain(&s.contact_forces)
-            .all(|v| v.is_finite()));
-        if s.is_optimal() {
-            // Recompute ‖G f − w‖ from scratch, relative to the problem's scale: the
-            // largest contact force (mz as mz/mu_torsion) seen through the row.
-            let g = &p.grasp_matrix;
-            let mut unit = Vec::new();
-            for c in &p.contacts {
-                unit.extend((0..c.dim()).map(|k| match (c, k) {
-                    (
-                        ContactModel::SfcLinear { mu_torsion, .. }
-                        | ContactModel::SfcElliptic { mu_torsion, .. },
-                        3,
-                    ) => *mu_torsion,
-                    _ => 1.0,
-                }));
-            }
-            let fmax = s
-                .contact_forces
-                .iter()
-                .zip(&unit)
-                .fold(0.0f64, |a, (v, u)| a.max((v / u).abs()));
-            for i in 0..6 {
-                let through: f64 = (0..g.ncols())
-                    .map(|j| (g[(i, j)] * unit[j]).abs())
-                    .sum::<f64>()
-                    * fmax;
-                let r: f64 = (0..g.ncols())
-                    .map(|j| g[(i, j)] * s.contact_forces[j])
-                    .sum::<f64>()
-                    - p.wrench[i];
-                let scale = through + p.wrench[i].abs();
-                assert!(
-                    r.abs() <= 1e-5 * scale,
-                    "{backend}/{cones}: row {i} residual {r} of {scale}"
-                );
-            }
+            .zip(&unit)
+            .fold(0.0f64, |a, (v, u)| a.max((v / u).abs()));
+        for i in 0..6 {
+            let through: f64 = (0..g.ncols())
+                .map(|j| (g[(i, j)] * unit[j]).abs())
+                .sum::<f64>()
+                * fmax;
+            let r: f64 = (0..g.ncols())
+                .map(|j| g[(i, j)] * s.contact_forces[j])
+                .sum::<f64>()
+                - wrench[i];
+            let scale = through + wrench[i].abs();
+            assert!(
+                r.abs() <= 1e-5 * scale,
+                "{backend}/{cones}: row {i} residual {r} of {scale}"
+            );
         }
     }
 }
