@@ -125,6 +125,27 @@ fn out_of_domain_numbers_name_field_value_and_range() {
             Box::new(|p| p["torque_limits"] = serde_json::json!([1e300, null, 1, 1])),
             &["torque_limits[0]"],
         ),
+        // Subnormal numbers: too few digits for any answer to pass its checks.
+        (
+            Box::new(|p| p["grasp_matrix"][0][0] = 1e-310.into()),
+            &["grasp_matrix[0][0]", "subnormal", "1e-310"],
+        ),
+        (
+            Box::new(|p| p["jacobian_transpose"][1][1] = (-4e-320).into()),
+            &["jacobian_transpose[1][1]", "subnormal"],
+        ),
+        (
+            Box::new(|p| p["wrench"][5] = 5e-324.into()),
+            &["wrench[5]", "subnormal"],
+        ),
+        (
+            Box::new(|p| p["torque_limits"] = serde_json::json!([1e-310, null, 1, 1])),
+            &["torque_limits[0]", "subnormal"],
+        ),
+        (
+            Box::new(|p| p["min_normal_force"] = 1e-315.into()),
+            &["min_normal_force[0]", "subnormal"],
+        ),
     ];
     for (i, (edit, needles)) in cases.iter().enumerate() {
         let mut p = paper();
@@ -140,6 +161,11 @@ fn geometry_out_of_domain_is_refused() {
             .unwrap();
     g["fingers"][0]["joints"][0]["origin"] = serde_json::json!([1e308, 0, 0]);
     assert_refused(&solve_json(&g, "origin.json", &[]), &["origin", "1e12"]);
+    g["fingers"][0]["joints"][0]["origin"] = serde_json::json!([0.09, 1e-320, -0.04]);
+    assert_refused(
+        &solve_json(&g, "origin.json", &[]),
+        &["origin", "subnormal"],
+    );
 }
 
 #[test]

@@ -238,8 +238,8 @@ fn parse_line(
 fn wrench_list(v: &Value) -> Result<Vec<[f64; 6]>, String> {
     let bad = |what: String| {
         format!(
-            "wrenches: expected a non-empty list of wrenches [Fx, Fy, Fz, Mx, My, Mz] of numbers of magnitude at most {:e}, got {what}",
-            grasp_torque::problem::MAX_MAGNITUDE
+            "wrenches: expected a non-empty list of wrenches [Fx, Fy, Fz, Mx, My, Mz], each {}, got {what}",
+            grasp_torque::problem::DOMAIN
         )
     };
     let list = v.as_array().ok_or_else(|| bad(v.to_string()))?;
@@ -255,9 +255,7 @@ fn wrench_list(v: &Value) -> Result<Vec<[f64; 6]>, String> {
                 .unwrap_or(None);
             match nums {
                 Some(n)
-                    if n.len() == 6
-                        && n.iter()
-                            .all(|x| x.abs() <= grasp_torque::problem::MAX_MAGNITUDE) =>
+                    if n.len() == 6 && n.iter().all(|&x| grasp_torque::problem::in_domain(x)) =>
                 {
                     let mut a = [0.0; 6];
                     a.copy_from_slice(&n);

@@ -344,12 +344,20 @@ impl ExactSolver {
         // μ/(α κ ρ)): a shared row's directly; a cone's from its faces, whose fz
         // coefficient is 1, through the cone's head row (mu·fz, or fz for SFCe), so
         // that the first Newton step already has the cone's curvature.
-        let ak = alpha * self.conic.kappa;
+        // Where κ = 1/k² underflows (the small end of the input domain), μ k/α · k/ρ.
+        let (kappa, ts) = (self.conic.kappa, self.conic.torque_scale);
+        let scaled = |mu: f64, rho: f64| {
+            if kappa.is_normal() {
+                mu / (alpha * kappa * rho)
+            } else {
+                mu * (ts / alpha) * (ts / rho)
+            }
+        };
         let mu = &self.lin.multipliers;
         if mu.len() == self.inner_row.len() {
             for &i in self.lin.active_set.as_deref().unwrap_or(&[]) {
                 if let Some(r) = self.inner_row[i] {
-                    nw.nu_row[r] = mu[i] / (ak * self.conic.row_scale[r - self.conic.linear_at]);
+                    nw.nu_row[r] = scaled(mu[i], self.conic.row_scale[r - self.conic.linear_at]);
                 }
                 if let Some((c, g)) = self.inner_face[i] {
                     let head = match self.qp.contacts[c].model {
@@ -357,7 +365,7 @@ impl ExactSolver {
                         _ => 1.0,
                     };
                     if let Some(k) = self.soc_group.iter().position(|&p| p == (c, g)) {
-                        nw.nu_cone[k] += mu[i] / (ak * head);
+                        nw.nu_cone[k] += scaled(mu[i], head);
                     }
                 }
             }

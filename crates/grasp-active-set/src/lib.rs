@@ -306,15 +306,18 @@ impl ActiveSetSolver {
         let ld = qp.least_distance();
         let p = ld.eq.nrows();
         let eqs = match (&form.eq_null_t, &form.eq_pinv) {
-            // (κ = 1/k² under- or overflows only at scales no answer survives: then
-            // the decomposition.)
             (Some(nt), Some(pinv))
-                if form.free == 0 && pinv.ncols() == p && form.kappa.is_normal() =>
+                if form.free == 0 && pinv.ncols() == p && form.torque_scale.is_normal() =>
             {
+                // (1/√κ where κ is normal: the same k to the last bit as always.)
                 // x = (k/α) D^½ τ on the torques (col_scale = k √w), so the form's
                 // particular solution x_p = E⁺ bw_E w / α is u0 = E⁺ bw_E w / k, and
                 // u0 = −pu w.
-                let k = 1.0 / form.kappa.sqrt();
+                let k = if form.kappa.is_normal() {
+                    1.0 / form.kappa.sqrt()
+                } else {
+                    form.torque_scale
+                };
                 let mut pu = Matrix::zeros(form.joints, 6);
                 for i in 0..form.joints {
                     let row = pu.row_mut(i);

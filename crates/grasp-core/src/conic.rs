@@ -72,8 +72,12 @@ pub struct ConicForm {
     pub cones: Vec<ConeKind>,
     /// Variable scale: `x = col_scale ⊙ (τ, ξ) / α`.
     pub col_scale: Vec<f64>,
-    /// Objective normalisation κ: `Σ w_j τ_j² = α² κ ‖x_τ‖²`.
+    /// Objective normalisation κ = 1/k²: `Σ w_j τ_j² = α² κ ‖x_τ‖²`. It underflows
+    /// where the answer's σ would (k near 1e200, at the small end of the input domain):
+    /// what must survive there reads [`Self::torque_scale`].
     pub kappa: f64,
+    /// Torque scale k: `x_j = k √w_j τ_j / α` on the torques.
+    pub torque_scale: f64,
     /// The linear rows of the view start at this row, each scaled by `row_scale`.
     pub linear_at: usize,
     /// Scale of each linear row of the view.
@@ -345,6 +349,7 @@ impl ConicForm {
             cones,
             col_scale,
             kappa: 1.0 / (k * k),
+            torque_scale: k,
             linear_at,
             row_scale,
             soc_contacts,

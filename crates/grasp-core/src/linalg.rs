@@ -16,7 +16,7 @@
 //! lower, as for grasps whose `[G; Jᵀ]` has passive internal forces. Both decide the rank
 //! exactly as the SVD would, from bounds on the singular values.
 
-use crate::matrix::Matrix;
+use crate::matrix::{finite_max_abs, Matrix};
 
 /// A full singular value decomposition `A = U Σ Vᵀ`.
 #[derive(Clone, Debug)]
@@ -383,8 +383,13 @@ fn explicit_q(w: &[f64], len: usize, k: usize, vhead: &[f64], tau: &[f64]) -> Ve
 /// otherwise (and for a wide or non-finite `y`).
 pub fn orthonormal_columns(y: &Matrix) -> Option<Matrix> {
     let (len, k) = (y.nrows(), y.ncols());
-    if k > len || !y.as_slice().iter().all(|v| v.is_finite()) {
+    let big = finite_max_abs(y.as_slice())?;
+    if k > len {
         return None;
+    }
+    // The basis is that of any multiple of y.
+    if let Some((scaled, ..)) = power_of_two_scaled(y, big, RankThreshold::Relative(0.0)) {
+        return orthonormal_columns(&scaled);
     }
     let mut w = longer_side(y);
     let (mut vhead, mut tau) = (vec![0.0; k], vec![0.0; k]);
@@ -464,8 +469,9 @@ fn clear_full_rank_qr(
 /// when `a` is clearly of full rank (the QR's R alone).
 pub fn rank(a: &Matrix, threshold: RankThreshold) -> Result<usize, SvdError> {
     let (rows, cols) = (a.nrows(), a.ncols());
-    if a.as_slice().iter().any(|x| !x.is_finite()) {
-        return Err(SvdError { rows, cols });
+    let big = finite_max_abs(a.as_slice()).ok_or(SvdError { rows, cols })?;
+    if let Some((scaled, _, threshold)) = power_of_two_scaled(a, big, threshold) {
+        return rank(&scaled, threshold);
     }
     let k = rows.min(cols);
     if k > 0 {
@@ -666,9 +672,53 @@ fn decompose_cod(a: &Matrix, threshold: RankThreshold) -> Option<Decomposition> 
 /// rank is clearly below full, else by the SVD.
 pub fn decompose(a: &Matrix, threshold: RankThreshold) -> Result<Decomposition, SvdError> {
     let (rows, cols) = (a.nrows(), a.ncols());
-    if a.as_slice().iter().any(|x| !x.is_finite()) {
-        return Err(SvdError { rows, cols });
+    let big = finite_max_abs(a.as_slice()).ok_or(SvdError { rows, cols })?;
+    if let Some((scaled, (h1, h2), threshold)) = power_of_two_scaled(a, big, threshold) {
+        // (s A)⁺ = A⁺ / s, and the bases are A's: only the transform scales back.
+        let mut d = decompose_in_range(&scaled, threshold)?;
+        d.row_transform
+            .as_mut_slice()
+            .iter_mut()
+            .for_each(|x| *x = *x * h1 * h2);
+        return Ok(d);
     }
+    decompose_in_range(a, threshold)
+}
+
+/// Entries are safe to square and sum within this range of magnitudes.
+const SAFE_SCALE: (f64, f64) = (1e-100, 1e100);
+
+/// `s A` with s = h1 h2 a power of two that brings A's largest entry (`big`) to about
+/// 1, with the threshold scaled alike, when that entry is outside [`SAFE_SCALE`] (where the
+/// decompositions' squared norms would underflow or overflow); `None` otherwise, so
+/// that the usual case runs unchanged. Scaling by a power of two is exact, and so is
+/// every rank decision: the factors are those of A.
+fn power_of_two_scaled(
+    a: &Matrix,
+    big: f64,
+    threshold: RankThreshold,
+) -> Option<(Matrix, (f64, f64), RankThreshold)> {
+    if big == 0.0 || (SAFE_SCALE.0..=SAFE_SCALE.1).contains(&big) {
+        return None;
+    }
+    // |e| ≤ 1074: 2^−e may not be a normal number, its two halves are.
+    let e = big.log2().round() as i32;
+    let (h1, h2) = (2f64.powi(-(e / 2)), 2f64.powi(-(e - e / 2)));
+    let mut scaled = a.clone();
+    scaled
+        .as_mut_slice()
+        .iter_mut()
+        .for_each(|x| *x = *x * h1 * h2);
+    let threshold = match threshold {
+        RankThreshold::Relative(t) => RankThreshold::Relative(t),
+        RankThreshold::Absolute(t) => RankThreshold::Absolute(t * h1 * h2),
+    };
+    Some((scaled, (h1, h2), threshold))
+}
+
+/// [`decompose`] of a finite A whose squares stay in range.
+fn decompose_in_range(a: &Matrix, threshold: RankThreshold) -> Result<Decomposition, SvdError> {
+    let (rows, cols) = (a.nrows(), a.ncols());
     if rows > 0 && cols > 0 {
         if let Some(d) = decompose_qr(a, threshold).or_else(|| decompose_cod(a, threshold)) {
             return Ok(d);
@@ -791,6 +841,81 @@ mod tests {
             let la = fast.left_null.transpose().matmul(&a);
             assert!(la.as_slice().iter().all(|x| x.abs() < 1e-12));
         }
+    }
+
+    /// At scales whose squares under- or overflow (2^±900, about 1e±271), the
+    /// decomposition, the rank and an orthonormal basis are those of the matrix at
+    /// scale 1, bit for bit, with the transform scaled back: full rank (QR), rank
+    /// deficient (the complete orthogonal decomposition), and near the threshold (the
+    /// SVD), under both kinds of threshold.
+    #[test]
+    fn decompositions_are_exact_at_scales_whose_squares_overflow() {
+        let mut seed = 11u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        for (rows, cols, r, gap) in [(15, 9, 9, 1.0), (10, 8, 6, 1.0), (6, 9, 5, 1e-9)] {
+            // Rank `rank`, the last singular direction at `gap`, largest entry exactly 1.
+            let b = Matrix::from_fn(rows, r, |_, _| next());
+            let c = Matrix::from_fn(r, cols, |i, _| next() * if i + 1 == r { gap } else { 1.0 });
+            let mut a = b.matmul(&c);
+            let big = a.max_abs();
+            a.as_mut_slice().iter_mut().for_each(|v| *v /= big);
+            for thr in [RankThreshold::Relative(1e-9), RankThreshold::Absolute(1e-9)] {
+                let base = decompose(&a, thr).unwrap();
+                for e in [-900, 900] {
+                    let s = 2f64.powi(e);
+                    let scaled = Matrix::from_fn(rows, cols, |i, j| a[(i, j)] * s);
+                    let thr_s = match thr {
+                        RankThreshold::Relative(t) => RankThreshold::Relative(t),
+                        RankThreshold::Absolute(t) => RankThreshold::Absolute(t * s),
+                    };
+                    let d = decompose(&scaled, thr_s).unwrap();
+                    let at = format!("{rows}×{cols} {thr:?} 2^{e}");
+                    assert_eq!(rank(&scaled, thr_s).unwrap(), base.rank(), "{at}");
+                    assert_eq!(d.row_basis.as_slice(), base.row_basis.as_slice(), "{at}");
+                    assert_eq!(d.null_basis.as_slice(), base.null_basis.as_slice(), "{at}");
+                    assert_eq!(d.left_null.as_slice(), base.left_null.as_slice(), "{at}");
+                    for (x, y) in d
+                        .row_transform
+                        .as_slice()
+                        .iter()
+                        .zip(base.row_transform.as_slice())
+                    {
+                        assert_eq!(*x, y / s, "{at}");
+                    }
+                    let q = orthonormal_columns(&Matrix::from_fn(rows.max(cols), 3, |i, j| {
+                        scaled[(i % rows, (i + j) % cols)]
+                    }));
+                    let q0 = orthonormal_columns(&Matrix::from_fn(rows.max(cols), 3, |i, j| {
+                        a[(i % rows, (i + j) % cols)]
+                    }));
+                    assert_eq!(
+                        q.map(|q| q.as_slice().to_vec()),
+                        q0.map(|q| q.as_slice().to_vec())
+                    );
+                }
+            }
+        }
+    }
+
+    /// Euclidean norms whose squares under- or overflow, and NaN.
+    #[test]
+    fn norms_at_the_ends_of_the_range() {
+        use crate::matrix::norm2;
+        for s in [1e-300, 1e-200, 1e-160, 1.0, 1e160, 1e300] {
+            let n = norm2(&[3.0 * s, 4.0 * s, 0.0]);
+            assert!(
+                (n - 5.0 * s).abs() <= 4.0 * f64::EPSILON * 5.0 * s,
+                "{s}: {n}"
+            );
+        }
+        assert_eq!(norm2(&[0.0, 0.0]), 0.0);
+        assert!(norm2(&[1e300, f64::NAN]).is_nan());
+        assert!(norm2(&[1e-300, f64::NAN]).is_nan());
     }
 
     /// Orthonormal columns, to rounding.

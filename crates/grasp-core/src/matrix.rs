@@ -397,8 +397,45 @@ pub fn all_finite(a: &[f64]) -> bool {
     (s[0] + s[1]) + (s[2] + s[3]) == 0.0
 }
 
-/// Euclidean norm of a slice.
+/// The largest magnitude of an entry, `None` if any is not finite: [`all_finite`] and
+/// [`Matrix::max_abs`] in one pass, four lanes.
+pub fn finite_max_abs(a: &[f64]) -> Option<f64> {
+    let (mut s, mut m) = ([0.0f64; 4], [0.0f64; 4]);
+    let mut blocks = a.chunks_exact(4);
+    for b in &mut blocks {
+        for l in 0..4 {
+            s[l] += b[l] * 0.0;
+            let v = b[l].abs();
+            m[l] = if v > m[l] { v } else { m[l] };
+        }
+    }
+    for &v in blocks.remainder() {
+        s[0] += v * 0.0;
+        m[0] = if v.abs() > m[0] { v.abs() } else { m[0] };
+    }
+    ((s[0] + s[1]) + (s[2] + s[3]) == 0.0).then(|| m[0].max(m[1]).max(m[2].max(m[3])))
+}
+
+/// Euclidean norm of a slice. Where the squares would underflow or overflow (entries
+/// beyond about 1e±150), the slice is scaled by its largest entry first, so that a
+/// change of units by any factor scales the norm by the same factor.
 #[inline]
 pub fn norm2(a: &[f64]) -> f64 {
-    dot(a, a).sqrt()
+    let plain = dot(a, a);
+    if plain.is_nan() || (plain.is_finite() && plain > 1e-280) {
+        plain.sqrt()
+    } else {
+        norm2_scaled(a)
+    }
+}
+
+/// [`norm2`] by the largest entry: squares of `a / max |a_i|` cannot overflow.
+#[cold]
+#[inline(never)]
+fn norm2_scaled(a: &[f64]) -> f64 {
+    let big = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if big == 0.0 || !big.is_finite() {
+        return big;
+    }
+    big * a.iter().map(|v| (v / big) * (v / big)).sum::<f64>().sqrt()
 }

@@ -297,6 +297,11 @@ fn actuator_space(
     ))
 }
 
+/// Largest ratio between the norms of two rows of `[G; Jᵀ]` for which `euclidean`
+/// keeps the plain A⁺: beyond it, its rounding grows with the ratio. Real hands in SI
+/// units stay within about 100 (lever arms of centimetres against unit force rows).
+const PLAIN_ROW_RATIO: f64 = 1e4;
+
 impl GraspModel {
     /// Builds the model of a validated problem.
     pub fn new(p: &GraspProblem, opts: &ModelOptions) -> Result<Self, ModelError> {
@@ -337,38 +342,84 @@ impl GraspModel {
             vec![1.0; n]
         };
         // Row equilibration R: it leaves the range condition and the least-norm force of
-        // a consistent [w; τ] unchanged, and makes the rank decision unit-free. The
-        // paper's plain A⁺ (`euclidean`, and the paper model's least squares, which
-        // depend on row weights) keeps R = I, so that Z is eq. 49's.
-        let equilibrate = opts.equilibrium == Equilibrium::Consistent
-            && p.internal_forces != InternalForces::Euclidean;
+        // a consistent [w; τ] unchanged (the solutions of R A f = R b are those of
+        // A f = b), and makes the rank decision unit-free. The paper's plain A⁺
+        // (`euclidean`, and the paper model's least squares, which depend on row
+        // weights) keeps R = I, so that Z is eq. 49's, unless its rank decision is not
+        // the equilibrated one (below).
         let mut scaled = vec![0.0; n];
-        let r: Vec<f64> = (0..rows)
-            .map(|i| {
-                for ((s, x), d) in scaled.iter_mut().zip(a_row(i)).zip(&dinv) {
-                    *s = x * d;
-                }
-                let nrm = crate::matrix::norm2(&scaled);
-                if equilibrate && nrm > 0.0 {
-                    1.0 / nrm
-                } else {
-                    1.0
-                }
-            })
-            .collect();
-        // R A D⁻¹.
-        let mut data = Vec::with_capacity(rows * n);
-        for (i, ri) in r.iter().enumerate() {
-            data.extend(a_row(i).iter().zip(&dinv).map(|(a, d)| a * d * ri));
-        }
-        let mat = Matrix::from_rows_data(rows, n, data);
-        let dec = decompose(&mat, RankThreshold::Relative(opts.rank_tolerance)).map_err(|_| {
-            ModelError::Decomposition {
-                what: "[G; Jᵀ]",
-                rows,
-                cols: n,
+        let mut row_norms = Vec::with_capacity(rows);
+        for i in 0..rows {
+            for ((s, x), d) in scaled.iter_mut().zip(a_row(i)).zip(&dinv) {
+                *s = x * d;
             }
-        })?;
+            row_norms.push(crate::matrix::norm2(&scaled));
+        }
+        let decomposed = |equilibrate: bool| {
+            let r: Vec<f64> = row_norms
+                .iter()
+                .map(|&nrm| {
+                    if equilibrate && nrm > 0.0 {
+                        1.0 / nrm
+                    } else {
+                        1.0
+                    }
+                })
+                .collect();
+            // R A D⁻¹.
+            let mut data = Vec::with_capacity(rows * n);
+            for (i, ri) in r.iter().enumerate() {
+                data.extend(a_row(i).iter().zip(&dinv).map(|(a, d)| a * d * ri));
+            }
+            let mat = Matrix::from_rows_data(rows, n, data);
+            decompose(&mat, RankThreshold::Relative(opts.rank_tolerance))
+                .map(|dec| (r, dec))
+                .map_err(|_| ModelError::Decomposition {
+                    what: "[G; Jᵀ]",
+                    rows,
+                    cols: n,
+                })
+        };
+        let consistent = opts.equilibrium == Equilibrium::Consistent;
+        let (r, dec) = if consistent && p.internal_forces == InternalForces::Euclidean {
+            // The plain A⁺ is kept only for rows of comparable size, and only where the
+            // equilibrated matrix agrees that the directions it dropped are null: a
+            // torque unit 1e10 times the wrench's made `[G; Jᵀ]` look rank-deficient,
+            // and 1e8 times cost A⁺ eight digits. Otherwise R A D⁻¹'s decomposition,
+            // whose Z agrees with A⁺ on every consistent [w; τ].
+            let (lo, hi) = row_norms
+                .iter()
+                .filter(|&&v| v > 0.0)
+                .fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
+                    (lo.min(v), hi.max(v))
+                });
+            let plain = (hi <= PLAIN_ROW_RATIO * lo)
+                .then(|| decomposed(false))
+                .transpose()?;
+            let rows_fro = row_norms.iter().filter(|&&v| v > 0.0).count() as f64;
+            let bound = opts.rank_tolerance * rows_fro.sqrt();
+            let dropped_is_null = |dec: &crate::linalg::Decomposition| {
+                let q = dec.null_basis.ncols();
+                q == 0
+                    || (0..rows).all(|i| {
+                        (0..q).all(|k| {
+                            let v: f64 = a_row(i)
+                                .iter()
+                                .zip(&dinv)
+                                .zip(dec.null_basis.as_slice().chunks_exact(q))
+                                .map(|((a, d), nrow)| a * d * nrow[k])
+                                .sum();
+                            v.abs() <= bound * row_norms[i]
+                        })
+                    })
+            };
+            match plain {
+                Some((r, dec)) if dropped_is_null(&dec) => (r, dec),
+                _ => decomposed(true)?,
+            }
+        } else {
+            decomposed(consistent)?
+        };
         let rank = dec.rank();
         let zm = dec.pseudo_inverse();
         // Z = D⁻¹ (R A D⁻¹)⁺ R, split into Z1 (wrench) and Z2 (torque); E's columns

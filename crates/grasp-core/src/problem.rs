@@ -24,8 +24,35 @@ pub const MAX_CONTACTS: usize = 256;
 pub const MAX_FORCE_COMPONENTS: usize = 1024;
 
 /// Largest magnitude of any number in G, Jᵀ, the wrench, torque limits, minimum
-/// normal forces and geometry. Results are unit-invariant within it.
+/// normal forces and geometry. Results are unit-invariant within it. Nonzero numbers
+/// must also be normal (at least `f64::MIN_POSITIVE`, about 2.2e-308, in magnitude):
+/// subnormal numbers carry fewer significant digits, so no answer built on them could
+/// pass the residual checks.
 pub const MAX_MAGNITUDE: f64 = 1e12;
+
+/// Whether `v` is in the input domain: zero, or normal with magnitude at most
+/// [`MAX_MAGNITUDE`] (false for NaN and infinities).
+#[inline]
+pub fn in_domain(v: f64) -> bool {
+    // (Non-short-circuit: the validation of a matrix then vectorises.)
+    let a = v.abs();
+    (a <= MAX_MAGNITUDE) & ((a >= f64::MIN_POSITIVE) | (a == 0.0))
+}
+
+/// `x`, or 0 where it is subnormal: for G and Jᵀ computed from geometry, whose
+/// rounding error is far above the subnormal range, so that a product of small but
+/// valid inputs is not rejected by [`in_domain`].
+pub fn flush_subnormal(x: f64) -> f64 {
+    if x.is_subnormal() {
+        0.0
+    } else {
+        x
+    }
+}
+
+/// What [`in_domain`] expects, for error messages.
+pub const DOMAIN: &str =
+    "a finite number of magnitude at most 1e12, and 0 or at least 2.2e-308 (not subnormal)";
 
 /// Smallest and largest torque weight.
 pub const WEIGHT_RANGE: (f64, f64) = (1e-12, 1e12);
@@ -247,7 +274,7 @@ impl GraspProblem {
         }
         bounded_matrix("jacobian_transpose", jt)?;
         for (j, &v) in self.wrench.iter().enumerate() {
-            if v.is_nan() || v.abs() > MAX_MAGNITUDE {
+            if !in_domain(v) {
                 bounded(&format!("wrench[{j}]"), v)?;
             }
         }
@@ -308,11 +335,11 @@ impl GraspProblem {
             per_joint("torque_limits", l.len(), m, per)?;
             for (j, v) in l.iter().enumerate() {
                 if let Some(v) = *v {
-                    if !(v > 0.0 && v <= MAX_MAGNITUDE) {
+                    if !(v > 0.0 && in_domain(v)) {
                         return Err(ProblemError::invalid(
                             format!("torque_limits[{j}]"),
                             format!(
-                                "a number > 0 and at most {MAX_MAGNITUDE:e}, or null for no limit"
+                                "a number > 0 and at most {MAX_MAGNITUDE:e}, not subnormal, or null for no limit"
                             ),
                             v,
                         ));
@@ -329,10 +356,10 @@ impl GraspProblem {
                 ));
             }
             for (i, &v) in f.iter().enumerate() {
-                if !(0.0..=MAX_MAGNITUDE).contains(&v) {
+                if !(v >= 0.0 && in_domain(v)) {
                     return Err(ProblemError::invalid(
                         format!("min_normal_force[{i}]"),
-                        format!("a number from 0 to {MAX_MAGNITUDE:e}"),
+                        format!("a number from 0 to {MAX_MAGNITUDE:e}, not subnormal"),
                         v,
                     ));
                 }
@@ -374,24 +401,23 @@ pub fn contact_count(count: usize) -> Result<(), ProblemError> {
     Ok(())
 }
 
-/// A number within the input domain's magnitude, or an error naming `field`.
+/// A number within the input domain ([`in_domain`]), or an error naming `field`.
 pub fn bounded(field: &str, v: f64) -> Result<(), ProblemError> {
-    if v.abs() <= MAX_MAGNITUDE {
+    if in_domain(v) {
         Ok(())
     } else {
-        Err(ProblemError::invalid(
-            field,
-            format!("a finite number of magnitude at most {MAX_MAGNITUDE:e}"),
-            v,
-        ))
+        Err(ProblemError::invalid(field, DOMAIN, v))
     }
 }
 
 fn bounded_matrix(name: &str, a: &Matrix) -> Result<(), ProblemError> {
+    if a.as_slice().iter().fold(true, |ok, &v| ok & in_domain(v)) {
+        return Ok(());
+    }
     for i in 0..a.nrows() {
         for (j, &v) in a.row(i).iter().enumerate() {
             // The field is named only on failure: validation runs per grasp.
-            if v.is_nan() || v.abs() > MAX_MAGNITUDE {
+            if !in_domain(v) {
                 bounded(&format!("{name}[{i}][{j}]"), v)?;
             }
         }

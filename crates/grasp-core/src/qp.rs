@@ -234,6 +234,43 @@ impl LeastDistance<'_> {
     /// from each contact's Gram matrix of its scaled rows of Z2 (at most 4 × 4), so
     /// without H.
     pub fn max_row_norm(&self, col_scale: &[f64]) -> f64 {
+        let plain = self.max_row_norm_unscaled(col_scale);
+        if plain == 0.0 || (plain.is_finite() && (1e-140..=1e140).contains(&plain)) {
+            return plain;
+        }
+        // Squares beyond the range of f64 (a torque unit some 1e150 times the force
+        // unit's): the columns scaled by a power of two first, which is exact.
+        let big = match self.h {
+            InequalityRows::Formed(h) => {
+                h.as_slice()
+                    .chunks_exact(h.ncols().max(1))
+                    .fold(0.0f64, |a, row| {
+                        row.iter()
+                            .zip(col_scale)
+                            .fold(a, |a, (h, d)| a.max((h * d).abs()))
+                    })
+            }
+            InequalityRows::Factored(f) => {
+                f.z2.as_slice()
+                    .chunks_exact(f.z2.ncols().max(1))
+                    .fold(0.0f64, |a, row| {
+                        row.iter()
+                            .zip(col_scale)
+                            .fold(a, |a, (z, d)| a.max((z * d).abs()))
+                    })
+            }
+        };
+        let big = col_scale.iter().fold(big, |a, d| a.max(d.abs()));
+        if !(big.is_normal()) {
+            return plain;
+        }
+        let s = 2f64.powi(-(big.log2().round() as i32));
+        let scaled: Vec<f64> = col_scale.iter().map(|d| d * s).collect();
+        self.max_row_norm_unscaled(&scaled) / s
+    }
+
+    /// [`Self::max_row_norm`] without the scaling; NaN where a square overflowed.
+    fn max_row_norm_unscaled(&self, col_scale: &[f64]) -> f64 {
         let f = match self.h {
             InequalityRows::Formed(h) => {
                 return (0..h.nrows())
@@ -244,7 +281,7 @@ impl LeastDistance<'_> {
                             .map(|(h, d)| (h * d) * (h * d))
                             .sum::<f64>()
                     })
-                    .fold(0.0, f64::max)
+                    .fold(0.0, max_or_nan)
                     .sqrt()
             }
             InequalityRows::Factored(f) => f,
@@ -271,13 +308,13 @@ impl LeastDistance<'_> {
                         for (ft, g) in f.iter().zip(&gram) {
                             sq += ft * (g[0] * f[0] + g[1] * f[1] + g[2] * f[2] + g[3] * f[3]);
                         }
-                        largest = largest.max(sq);
+                        largest = max_or_nan(largest, sq);
                     }
                 }
                 // The normal force's row.
                 ConeRepr::Exact => {
                     let n = c.model.normal_index();
-                    largest = largest.max(gram[n][n]);
+                    largest = max_or_nan(largest, gram[n][n]);
                 }
             }
         }
@@ -327,6 +364,15 @@ fn contact_faces(model: &GraspModel, ci: usize, repr: &ConeRepr) -> Matrix {
 
 /// `Σ (a_i d_i)(b_i d_i)` in four independent lanes (a single chain of additions waits
 /// on each one's latency).
+/// The larger of two values, NaN if either is (`f64::max` drops a NaN).
+fn max_or_nan(a: f64, b: f64) -> f64 {
+    if b.is_nan() || b > a {
+        b
+    } else {
+        a
+    }
+}
+
 fn scaled_dot(a: &[f64], b: &[f64], d: &[f64]) -> f64 {
     let mut s = [0.0f64; 4];
     let (mut ca, mut cb, mut cd) = (a.chunks_exact(4), b.chunks_exact(4), d.chunks_exact(4));

@@ -386,12 +386,9 @@ pub enum WarmStartError {
         /// Linear rows.
         rows: usize,
     },
-    /// A wrench component that is not finite or beyond the input domain (the same
-    /// bound as a problem file's wrench).
-    #[error(
-        "wrench[{index}]: expected a finite number of magnitude at most {:e}, got {value:e}",
-        crate::problem::MAX_MAGNITUDE
-    )]
+    /// A wrench component outside the input domain (the same bound as a problem
+    /// file's wrench: [`crate::problem::in_domain`]).
+    #[error("wrench[{index}]: expected {}, got {value:e}", crate::problem::DOMAIN)]
     Wrench {
         /// Component.
         index: usize,
@@ -561,10 +558,7 @@ pub fn solve(
 }
 
 fn check_inputs(qp: &TorqueQp, w: &[f64; 6], warm: &WarmStart<'_>) -> Result<(), WarmStartError> {
-    if let Some(index) = w
-        .iter()
-        .position(|v| v.is_nan() || v.abs() > crate::problem::MAX_MAGNITUDE)
-    {
+    if let Some(index) = w.iter().position(|v| !crate::problem::in_domain(*v)) {
         return Err(WarmStartError::Wrench {
             index,
             value: w[index],

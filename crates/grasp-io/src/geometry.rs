@@ -21,7 +21,9 @@ use crate::file::{ModelName, Options};
 use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
 use grasp_core::matrix::Matrix;
-use grasp_core::problem::{contact_count, GraspProblem, MAX_JOINTS, MAX_MAGNITUDE};
+use grasp_core::problem::{
+    contact_count, flush_subnormal, in_domain, GraspProblem, DOMAIN, MAX_JOINTS,
+};
 use serde::{Deserialize, Serialize};
 
 /// How far from unit length an axis or normal may be.
@@ -175,10 +177,10 @@ pub(crate) fn check_vec(
     v: [f64; 3],
     unit: bool,
 ) -> Result<(), ProblemError> {
-    if v.iter().any(|x| x.is_nan() || x.abs() > MAX_MAGNITUDE) {
+    if !v.iter().all(|&x| in_domain(x)) {
         return Err(ProblemError::invalid(
             field(),
-            format!("three finite numbers of magnitude at most {MAX_MAGNITUDE:e}"),
+            format!("three numbers, each {DOMAIN}"),
             format!("{v:?}"),
         ));
     }
@@ -318,8 +320,8 @@ impl GeometryFile {
             models.push(model);
         }
         let nf = g_cols.len();
-        let g = Matrix::from_fn(6, nf, |r, c| g_cols[c][r]);
-        let jt = Matrix::from_fn(m, nf, |r, c| jt_cols[c][r]);
+        let g = Matrix::from_fn(6, nf, |r, c| flush_subnormal(g_cols[c][r]));
+        let jt = Matrix::from_fn(m, nf, |r, c| flush_subnormal(jt_cols[c][r]));
         let wrench = crate::file::wrench6(&self.wrench)?;
         let mut p = GraspProblem::new(g, jt, wrench, models);
         p.joint_names =

@@ -14,7 +14,9 @@ use crate::urdf::{nearest, JointKind, Robot};
 use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
 use grasp_core::matrix::Matrix;
-use grasp_core::problem::{contact_count, GraspProblem, MAX_JOINTS, MAX_MAGNITUDE};
+use grasp_core::problem::{
+    contact_count, flush_subnormal, GraspProblem, MAX_JOINTS, MAX_MAGNITUDE,
+};
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -528,8 +530,8 @@ impl HandFile {
             models.push(c.model);
         }
         let nf = g_cols.len();
-        let g = Matrix::from_fn(6, nf, |r, c| g_cols[c][r]);
-        let jt = Matrix::from_fn(rows.len(), nf, |r, c| jt_cols[c][r]);
+        let g = Matrix::from_fn(6, nf, |r, c| flush_subnormal(g_cols[c][r]));
+        let jt = Matrix::from_fn(rows.len(), nf, |r, c| flush_subnormal(jt_cols[c][r]));
         let wrench = crate::file::wrench6(&self.wrench)?;
         let mut p = GraspProblem::new(g, jt, wrench, models);
         let name_of = |k: usize| robot.joints[robot.independent[k]].name.clone();

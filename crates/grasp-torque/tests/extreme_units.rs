@@ -1,0 +1,129 @@
+//! Units at the edges of the input domain: the force unit, the torque unit, or both with
+//! the wrench, changed by factors from 1e-300 to 1e10 (the domain's normal numbers up to
+//! its 1e12 bound), on every bundled fixture in its own convention (`euclidean` ones
+//! included). The native solver, linear and exact cones, must give the same answer in
+//! the new units: σ computed from the rescaled torques matches the unscaled σ to the
+//! certificate's accuracy.
+//!
+//! Before: a torque unit 1e8 times the wrench's made `[G; Jᵀ]` look rank-deficient to
+//! the plain A⁺ (`infeasible`); a whole problem at 1e-170 lost its rank to underflowing
+//! squares (`infeasible`); torques at 1e-155 of the forces' scale gave NaN torques.
+#![cfg(feature = "active-set")]
+
+use grasp_torque::{solve, Backend, Cones, GraspProblem, Solution, SolverConfig, WarmStart};
+
+fn run(p: &GraspProblem, cones: Cones) -> Solution {
+    let config = SolverConfig {
+        backend: Some(Backend::ActiveSet),
+        cones,
+        ..Default::default()
+    };
+    let mut s = config.build(config.qp(p).unwrap()).unwrap();
+    solve(s.as_mut(), &p.wrench, &WarmStart::default()).unwrap()
+}
+
+/// Which unit changes.
+#[derive(Clone, Copy, Debug)]
+enum Unit {
+    /// Contact forces measured in units of 1/c: G and Jᵀ times c.
+    Force,
+    /// Torques in units of 1/c: Jᵀ, torque limits (and τ) times c.
+    Torque,
+    /// Forces, moments and torques all in units of 1/c, lengths unchanged: G, Jᵀ, the
+    /// wrench and torque limits times c, contact forces unchanged.
+    Everything,
+}
+
+/// The problem in the new units, and the factor on its torques.
+fn rescaled(p: &GraspProblem, unit: Unit, c: f64) -> (GraspProblem, f64) {
+    let mut q = p.clone();
+    let scale = |m: &mut grasp_torque::Matrix| m.as_mut_slice().iter_mut().for_each(|v| *v *= c);
+    match unit {
+        Unit::Force => {
+            scale(&mut q.grasp_matrix);
+            scale(&mut q.jacobian_transpose);
+            if let Some(fmin) = &mut q.min_normal_force {
+                fmin.iter_mut().for_each(|v| *v /= c);
+            }
+        }
+        Unit::Torque | Unit::Everything => {
+            scale(&mut q.jacobian_transpose);
+            if let Some(lim) = &mut q.torque_limits {
+                lim.iter_mut().flatten().for_each(|v| *v *= c);
+            }
+            if let Some(t) = &mut q.initial_torque {
+                t.iter_mut().for_each(|v| *v *= c);
+            }
+            if matches!(unit, Unit::Everything) {
+                scale(&mut q.grasp_matrix);
+                q.wrench.iter_mut().for_each(|v| *v *= c);
+            }
+        }
+    }
+    let tau_factor = if matches!(unit, Unit::Force) { 1.0 } else { c };
+    (q, tau_factor)
+}
+
+/// Whether every number of `q` is in the domain: within its bound of 1e12 (a factor of
+/// 1e10 takes some beyond it, as 1e-300 does minimum normal forces), and normal where
+/// not zero (1e-300 makes the geometry fixtures' entries at rounding level, such as
+/// the Shadow tripod's 4e-19, subnormal).
+fn within_bound(q: &GraspProblem) -> bool {
+    let limits = q.torque_limits.iter().flatten().flatten();
+    q.grasp_matrix
+        .as_slice()
+        .iter()
+        .chain(q.jacobian_transpose.as_slice())
+        .chain(&q.wrench)
+        .chain(q.min_normal_force.iter().flatten())
+        .chain(limits)
+        .all(|&v| grasp_torque::problem::in_domain(v))
+}
+
+/// Σ w_j (τ_j / factor)²: σ in the original units, where σ itself may underflow.
+fn sigma_back(p: &GraspProblem, s: &Solution, factor: f64) -> f64 {
+    s.torque
+        .iter()
+        .enumerate()
+        .map(|(j, t)| {
+            let w = p.torque_weights.as_ref().map_or(1.0, |w| w[j]);
+            w * (t / factor) * (t / factor)
+        })
+        .sum()
+}
+
+#[test]
+fn units_at_the_edges_of_the_domain_do_not_change_the_answer() {
+    let mut checked = 0;
+    for path in grasp_testkit::fixture_paths(&["", "table1", "geometry", "hands"]) {
+        let p = grasp_torque::load_problem(&path).unwrap();
+        let name = path.display();
+        for (cones, tol) in [(Cones::Linear, 1e-9), (Cones::Exact, 2e-9)] {
+            let base = run(&p, cones);
+            assert!(base.is_optimal(), "{name} {cones}: {:?}", base.reason);
+            for unit in [Unit::Force, Unit::Torque, Unit::Everything] {
+                for c in [
+                    1e-300, 1e-250, 1e-200, 1e-150, 1e-100, 1e-30, 1e-8, 1e8, 1e10,
+                ] {
+                    let (q, factor) = rescaled(&p, unit, c);
+                    if !within_bound(&q) {
+                        continue;
+                    }
+                    let s = run(&q, cones);
+                    let at = format!("{name} {cones} {unit:?} × {c:e}");
+                    assert!(s.is_optimal(), "{at}: {:?} {:?}", s.status, s.reason);
+                    assert!(s.torque.iter().all(|t| t.is_finite()), "{at}");
+                    let sigma = sigma_back(&p, &s, factor);
+                    assert!(
+                        (sigma - base.objective).abs() <= tol * base.objective,
+                        "{at}: σ = {sigma} against {}",
+                        base.objective
+                    );
+                    checked += 1;
+                }
+            }
+        }
+    }
+    eprintln!("{checked} rescaled problems");
+    assert!(checked > 500, "{checked}");
+}
