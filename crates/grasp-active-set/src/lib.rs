@@ -583,8 +583,8 @@ impl Engine {
         let mut c0n = Vec::with_capacity(nr);
         // (By the reciprocal: a division per row, not per entry, which was a tenth of
         // the build. Each entry moves by an ulp at most. A kept row's norm is above
-        // 1e-13 of the largest, and H's entries are at least about 1e-12 wherever Jᵀ's
-        // are within the input domain's 1e12: its reciprocal is finite.)
+        // 1e-13 of the largest, which is at least about 1e-12 wherever Jᵀ's entries
+        // are within the input domain's 1e12 (H ~ 1/Jᵀ): its reciprocal is finite.)
         for (r, (&i, &nrm)) in h_row.iter().zip(&nu).enumerate() {
             let inv = 1.0 / nrm;
             for (x, v) in a.row_mut(r).iter_mut().zip(&hnp.row(i)[..k]) {
