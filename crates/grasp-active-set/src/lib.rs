@@ -228,6 +228,11 @@ struct Engine {
     nu: Vec<f64>,
     /// `ĉ = c0n − mn · w`, with mn (R × 6) column-major like `a_cols`.
     c0n: Vec<f64>,
+    /// The reduced rows before the torque limits' (the view's last rows): those whose
+    /// right-hand sides set the tolerances' scale. A loose limit's constant side (1e6
+    /// times the torques) made the tolerances loose enough to accept a cone row
+    /// violated by 1e-2 before.
+    scale_rows: usize,
     mn_cols: Vec<f64>,
     /// Rows of H that no torque affects: `c0 − m · w ≤ 0` must hold as it is.
     fixed: Vec<usize>,
@@ -616,7 +621,12 @@ impl Engine {
             factor: Factor::new(kp),
             reusable: false,
         };
+        let scale_rows = h_row
+            .iter()
+            .take_while(|&&i| !matches!(qp.rows[i], RowId::TorqueLimit { .. }))
+            .count();
         Ok(Self {
+            scale_rows,
             rows: qp.rows.to_vec(),
             c0: qp.c0.to_vec(),
             m,
@@ -847,7 +857,7 @@ struct Iter<'s> {
 
 impl<'s> Iter<'s> {
     fn new(s: &'s mut Engine) -> Self {
-        let scale = norm_inf(&s.ws.b).max(f64::MIN_POSITIVE);
+        let scale = norm_inf(&s.ws.b[..s.scale_rows]).max(f64::MIN_POSITIVE);
         let penalty = s.settings.elastic_penalty * scale.max(1e-12);
         Self {
             s,

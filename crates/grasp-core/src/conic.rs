@@ -80,6 +80,9 @@ pub struct ConicForm {
     pub torque_scale: f64,
     /// The linear rows of the view start at this row, each scaled by `row_scale`.
     pub linear_at: usize,
+    /// The torque limits' rows (the view's last linear rows): constant right-hand
+    /// sides that x = 0 meets, so they do not set α.
+    pub limit_rows: std::ops::Range<usize>,
     /// Scale of each linear row of the view.
     pub row_scale: Vec<f64>,
     /// The contact of each second-order cone, in cone order. An SFCl contact has two:
@@ -252,6 +255,16 @@ impl ConicForm {
         if qp.inequality_rows() > 0 {
             cones.push(ConeKind::Nonnegative(qp.inequality_rows()));
         }
+        let limits = qp
+            .rows
+            .iter()
+            .filter(|r| matches!(r, RowId::TorqueLimit { .. }))
+            .count();
+        let limit_rows =
+            linear_at + qp.inequality_rows() - limits..linear_at + qp.inequality_rows();
+        debug_assert!(qp.rows[qp.inequality_rows() - limits..]
+            .iter()
+            .all(|r| matches!(r, RowId::TorqueLimit { .. })));
         let mut soc_contacts = Vec::new();
         for (ci, (c, repr)) in qp.contacts.iter().zip(&qp.constraints.cones).enumerate() {
             if !matches!(repr, ConeRepr::Exact) {
@@ -351,6 +364,7 @@ impl ConicForm {
             kappa: 1.0 / (k * k),
             torque_scale: k,
             linear_at,
+            limit_rows,
             row_scale,
             soc_contacts,
         }
@@ -366,12 +380,16 @@ impl ConicForm {
         self.a.nrows()
     }
 
-    /// `b(w)` into `out`; returns its magnitude α = ‖b(w)‖∞, by which `out` is then
-    /// divided (unless it is 0: every row homogeneous, τ = 0 optimal).
+    /// `b(w)` into `out`; returns its magnitude α = ‖b(w)‖∞ over every row but the
+    /// torque limits', by which `out` is then divided (unless it is 0: every other row
+    /// homogeneous, τ = 0 optimal). A loose limit (1e6 times the torques) set the scale
+    /// before, and every other row then sat at 1e-6 of it, below the solvers'
+    /// tolerances.
     pub fn b_into(&self, w: &[f64; 6], out: &mut [f64]) -> f64 {
         out.copy_from_slice(&self.b0);
         add_columns(out, &self.bw_cols, w, 1.0);
-        let alpha = out.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let (head, tail) = (&out[..self.limit_rows.start], &out[self.limit_rows.end..]);
+        let alpha = head.iter().chain(tail).fold(0.0f64, |a, v| a.max(v.abs()));
         if alpha > 0.0 {
             let inv = 1.0 / alpha;
             out.iter_mut().for_each(|v| *v *= inv);

@@ -127,3 +127,60 @@ fn units_at_the_edges_of_the_domain_do_not_change_the_answer() {
     eprintln!("{checked} rescaled problems");
     assert!(checked > 500, "{checked}");
 }
+
+/// Torque limits far above the torques (1e3 to 1e12 times the largest, as a user who
+/// writes 1e9 for "no limit" sets them) leave the answer alone. Before, the limits'
+/// constant right-hand sides set the solvers' scale: at 1e6 times the torques the
+/// native linear solve accepted a cone row violated by 1e-2 (caught by the residual
+/// check: `numerical_failure`), and Clarabel's answers and the native exact one, all
+/// called optimal, were up to 4e5 times the true σ (hand3-pcwf at 1e9).
+#[test]
+fn loose_torque_limits_do_not_change_the_answer() {
+    let mut checked = 0;
+    for path in grasp_testkit::fixture_paths(&["", "table1", "geometry", "hands"]) {
+        let p = grasp_torque::load_problem(&path).unwrap();
+        let name = path.display();
+        for (cones, tol) in [(Cones::Linear, 1e-9), (Cones::Exact, 2e-9)] {
+            let mut free = p.clone();
+            free.torque_limits = None;
+            let base = run(&free, cones);
+            assert!(base.is_optimal(), "{name} {cones}: {:?}", base.reason);
+            let largest = base.torque.iter().fold(0.0f64, |a, t| a.max(t.abs()));
+            for factor in [1e3, 1e6, 1e9, 1e12] {
+                let limit = (largest * factor).min(grasp_torque::problem::MAX_MAGNITUDE);
+                let mut q = p.clone();
+                q.torque_limits = Some(vec![Some(limit); p.actuated()]);
+                let s = run(&q, cones);
+                let at = format!("{name} {cones} limits {limit:e}");
+                assert!(s.is_optimal(), "{at}: {:?} {:?}", s.status, s.reason);
+                assert!(
+                    (s.objective - base.objective).abs() <= tol * base.objective,
+                    "{at}: σ = {} against {}",
+                    s.objective,
+                    base.objective
+                );
+                // Clarabel stops (InsufficientProgress) from about 1e9 times the
+                // torques, but never calls a wrong answer optimal.
+                #[cfg(feature = "clarabel")]
+                {
+                    let config = SolverConfig {
+                        backend: Some(Backend::Clarabel),
+                        cones,
+                        ..Default::default()
+                    };
+                    let mut c = config.build(config.qp(&q).unwrap()).unwrap();
+                    let c = solve(c.as_mut(), &q.wrench, &WarmStart::default()).unwrap();
+                    assert!(
+                        !c.is_optimal()
+                            || (c.objective - base.objective).abs() <= 1e-6 * base.objective,
+                        "{at}: Clarabel σ = {} against {}",
+                        c.objective,
+                        base.objective
+                    );
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 100, "{checked}");
+}
