@@ -618,10 +618,11 @@ impl ConicForm {
         }
         let (primal, dual) = (primal / scale, dual / zscale);
         // Complementarity against the sizes of the gap's terms (xᵀPx + bᵀz at a
-        // stationary point). The scaled problem's right-hand side has size 1, so its
-        // objective's natural size is 1: the floor for a grasp whose optimum is τ = 0.
+        // stationary point), with no floor: the scaled optimum is not always of size 1
+        // (rows that x = 0 meets can set α), and a floor of 1 once let a point with 4e5
+        // times the optimal σ pass when the optimum's terms were 1e-18.
         let xpx: f64 = 2.0 * x[..m].iter().map(|v| v * v).sum::<f64>();
-        let gap = sz.abs() / (xpx + bz_size).max(1.0);
+        let gap = sz.abs() / (xpx + bz_size).max(f64::MIN_POSITIVE);
         Certificate {
             primal,
             dual,
