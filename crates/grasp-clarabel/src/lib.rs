@@ -130,6 +130,41 @@ impl ClarabelSolver {
         self.qp.constraints.has_exact()
     }
 
+    /// Solves the data in `self.b`, with the last solver where Clarabel allows it; a
+    /// reused factorisation must not change the answer, so a failure is retried fresh.
+    fn solve_b(&mut self) -> Result<(), String> {
+        self.run(false)?;
+        if !matches!(
+            self.status(),
+            SolverStatus::Solved
+                | SolverStatus::PrimalInfeasible
+                | SolverStatus::AlmostPrimalInfeasible
+        ) {
+            self.run(true)?;
+        }
+        Ok(())
+    }
+
+    /// Whether the last answer of a relaxed solve meets the torque limits' rows (their
+    /// `b` is constant: `b0 / α`), or proved infeasibility.
+    fn relaxation_holds(&self, alpha: f64) -> bool {
+        let Some(solver) = self.solver.as_ref() else {
+            return false;
+        };
+        let sol = &solver.solution;
+        match sol.status {
+            SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => true,
+            SolverStatus::Solved | SolverStatus::AlmostSolved => {
+                let (a, inv) = (&self.conic.a, 1.0 / alpha);
+                self.conic.limit_rows.clone().all(|i| {
+                    let ax: f64 = a.row(i).iter().zip(&sol.x).map(|(a, x)| a * x).sum();
+                    ax <= self.conic.b0[i] * inv
+                })
+            }
+            _ => false,
+        }
+    }
+
     /// Solves the data in `self.b` with a reused or fresh solver.
     fn run(&mut self, fresh: bool) -> Result<(), String> {
         let reused = !fresh
@@ -161,6 +196,10 @@ impl ClarabelSolver {
             .map_or(SolverStatus::Unsolved, |s| s.solution.status)
     }
 }
+
+/// A torque limit's row whose scaled right-hand side exceeds this (the other rows'
+/// are at most 1) is relaxed first ([`ClarabelSolver`]'s `solve_raw`).
+const FAR_LIMIT: f64 = 1e6;
 
 fn backend(message: String) -> Option<Reason> {
     Some(Reason::Backend {
@@ -199,19 +238,27 @@ impl TorqueSolver for ClarabelSolver {
             out.internal_forces.resize(d, 0.0);
             return;
         }
-        if let Err(e) = self.run(false) {
+        // Torque limits far beyond the rest of the scaled problem (1e9 written for "no
+        // limit") stall Clarabel's interior point. They are relaxed first (b = ∞, rows
+        // its presolve drops), and that answer kept only if it meets them: the optimum
+        // of a relaxation that is feasible is optimal, and a relaxation that is
+        // infeasible proves the problem so. Otherwise the full problem is solved.
+        let limits = self.conic.limit_rows.clone();
+        let relaxed = self.b[limits.clone()].iter().any(|&v| v > FAR_LIMIT);
+        if relaxed {
+            self.b[limits.clone()]
+                .iter_mut()
+                .filter(|v| **v > FAR_LIMIT)
+                .for_each(|v| *v = f64::INFINITY);
+        }
+        if let Err(e) = self.solve_b() {
             out.status = Status::NumericalFailure;
             out.reason = backend(e);
             return;
         }
-        // A reused factorisation must not change the answer: retry a failure fresh.
-        if !matches!(
-            self.status(),
-            SolverStatus::Solved
-                | SolverStatus::PrimalInfeasible
-                | SolverStatus::AlmostPrimalInfeasible
-        ) {
-            if let Err(e) = self.run(true) {
+        if relaxed && !self.relaxation_holds(alpha) {
+            self.conic.b_into(w, &mut self.b);
+            if let Err(e) = self.solve_b() {
                 out.status = Status::NumericalFailure;
                 out.reason = backend(e);
                 return;
