@@ -383,10 +383,11 @@ impl GraspModel {
         let consistent = opts.equilibrium == Equilibrium::Consistent;
         let (r, dec) = if consistent && p.internal_forces == InternalForces::Euclidean {
             // The plain A⁺ is kept only for rows of comparable size, and only where the
-            // equilibrated matrix agrees that the directions it dropped are null: a
-            // torque unit 1e10 times the wrench's made `[G; Jᵀ]` look rank-deficient,
-            // and 1e8 times cost A⁺ eight digits. Otherwise R A D⁻¹'s decomposition,
-            // whose Z agrees with A⁺ on every consistent [w; τ].
+            // equilibrated matrix agrees that the directions it dropped are null:
+            // torques in a unit 1e8 times the wrench's made hand3-pcwf's `[G; Jᵀ]` look
+            // rank-deficient, and in one 1e8 times smaller left σ off by 4e-9.
+            // Otherwise R A D⁻¹'s decomposition, whose Z agrees with A⁺ on every
+            // consistent [w; τ].
             let (lo, hi) = row_norms
                 .iter()
                 .filter(|&&v| v > 0.0)
