@@ -850,15 +850,9 @@ mod tests {
     /// SVD), under both kinds of threshold.
     #[test]
     fn decompositions_are_exact_at_scales_whose_squares_overflow() {
-        let mut seed = 11u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
+        let mut next = uniform(11);
         for (rows, cols, r, gap) in [(15, 9, 9, 1.0), (10, 8, 6, 1.0), (6, 9, 5, 1e-9)] {
-            // Rank `rank`, the last singular direction at `gap`, largest entry exactly 1.
+            // Rank r, the last singular direction at `gap`, largest entry exactly 1.
             let b = Matrix::from_fn(rows, r, |_, _| next());
             let c = Matrix::from_fn(r, cols, |i, _| next() * if i + 1 == r { gap } else { 1.0 });
             let mut a = b.matmul(&c);
@@ -918,6 +912,16 @@ mod tests {
         assert!(norm2(&[1e-300, f64::NAN]).is_nan());
     }
 
+    /// Uniform numbers in [−1, 1) from a linear congruential generator.
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        }
+    }
+
     /// Orthonormal columns, to rounding.
     fn assert_orthonormal(q: &Matrix) {
         let qtq = q.transpose().matmul(q);
@@ -935,13 +939,7 @@ mod tests {
     /// row_transform b` on the range.
     #[test]
     fn cod_matches_the_svd_on_rank_deficient_matrices() {
-        let mut seed = 7u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
+        let mut next = uniform(7);
         for (rows, cols, rank) in [
             (10, 12, 9),
             (12, 10, 7),

@@ -240,28 +240,19 @@ impl LeastDistance<'_> {
         }
         // Squares beyond the range of f64 (a torque unit some 1e150 times the force
         // unit's): the columns scaled by a power of two first, which is exact.
+        // The largest |m_ij d_j| of H's (or Z2's) columns scaled by d.
+        let largest = |m: &Matrix| {
+            m.as_slice()
+                .chunks_exact(m.ncols().max(1))
+                .flat_map(|row| row.iter().zip(col_scale).map(|(v, d)| (v * d).abs()))
+                .fold(0.0f64, f64::max)
+        };
         let big = match self.h {
-            InequalityRows::Formed(h) => {
-                h.as_slice()
-                    .chunks_exact(h.ncols().max(1))
-                    .fold(0.0f64, |a, row| {
-                        row.iter()
-                            .zip(col_scale)
-                            .fold(a, |a, (h, d)| a.max((h * d).abs()))
-                    })
-            }
-            InequalityRows::Factored(f) => {
-                f.z2.as_slice()
-                    .chunks_exact(f.z2.ncols().max(1))
-                    .fold(0.0f64, |a, row| {
-                        row.iter()
-                            .zip(col_scale)
-                            .fold(a, |a, (z, d)| a.max((z * d).abs()))
-                    })
-            }
+            InequalityRows::Formed(h) => largest(h),
+            InequalityRows::Factored(f) => largest(f.z2),
         };
         let big = col_scale.iter().fold(big, |a, d| a.max(d.abs()));
-        if !(big.is_normal()) {
+        if !big.is_normal() {
             return plain;
         }
         let s = 2f64.powi(-(big.log2().round() as i32));
@@ -362,8 +353,6 @@ fn contact_faces(model: &GraspModel, ci: usize, repr: &ConeRepr) -> Matrix {
     }
 }
 
-/// `Σ (a_i d_i)(b_i d_i)` in four independent lanes (a single chain of additions waits
-/// on each one's latency).
 /// The larger of two values, NaN if either is (`f64::max` drops a NaN).
 fn max_or_nan(a: f64, b: f64) -> f64 {
     if b.is_nan() || b > a {
@@ -373,6 +362,8 @@ fn max_or_nan(a: f64, b: f64) -> f64 {
     }
 }
 
+/// `Σ (a_i d_i)(b_i d_i)` in four independent lanes (a single chain of additions waits
+/// on each one's latency).
 fn scaled_dot(a: &[f64], b: &[f64], d: &[f64]) -> f64 {
     let mut s = [0.0f64; 4];
     let (mut ca, mut cb, mut cd) = (a.chunks_exact(4), b.chunks_exact(4), d.chunks_exact(4));
