@@ -32,7 +32,10 @@ Items without an answer (codes 2-5) have NaN torque, objective and residual.
 from __future__ import annotations
 
 import json
+import math
+import numbers
 import os
+import re
 from collections import namedtuple
 from typing import Any, Iterable, Mapping, Optional, Sequence, Union
 
@@ -81,13 +84,78 @@ def _plain(o: Any) -> Any:
     raise TypeError(f"{type(o).__name__} is not JSON serialisable")
 
 
+def _non_finite(obj: Any, path: str = ""):
+    """The path (``contacts[0].mu``, ``grasp_matrix[1][2]``, as the Rust side names
+    fields) and value of the first number in ``obj`` that is not finite, or None."""
+    if hasattr(obj, "tolist"):
+        obj = obj.tolist()
+    if isinstance(obj, float):
+        return None if math.isfinite(obj) else (path or "(input)", obj)
+    if isinstance(obj, Mapping):
+        items = ((f"{path}.{k}" if path else str(k), v) for k, v in obj.items())
+    elif isinstance(obj, (list, tuple)):
+        items = ((f"{path}[{i}]", v) for i, v in enumerate(obj))
+    else:
+        return None
+    for p, v in items:
+        found = _non_finite(v, p)
+        if found is not None:
+            return found
+    return None
+
+
 def _dumps(obj: Any) -> str:
-    # allow_nan=False: NaN is not JSON; the message names the value instead of a
-    # parse error deep in the Rust reader.
+    # allow_nan=False: NaN is not JSON; the message names the field and the value
+    # instead of a parse error deep in the Rust reader.
     try:
         return json.dumps(obj, default=_plain, allow_nan=False)
+    except ValueError:
+        found = _non_finite(obj)
+        if found is None:
+            raise
+        path, value = found
+        raise ValueError(f"{path}: expected a finite number, got {value}") from None
+
+
+def _real(name: str, a: Any) -> np.ndarray:
+    """``a`` as a C-contiguous float64 array. What is not real numbers is refused by
+    name: numpy would drop an imaginary part with a warning, read strings as numbers,
+    or fail on a ragged list without saying which argument."""
+    try:
+        arr = np.asarray(a)
     except ValueError as e:
-        raise ValueError(f"(input): expected finite numbers: {e}") from None
+        raise ValueError(f"{name}: expected a rectangular array of numbers ({e})") from None
+    kind = arr.dtype.kind
+    if kind == "c":
+        raise ValueError(f"{name}: expected real numbers, got complex values ({arr.dtype})")
+    if kind in "USV":
+        raise ValueError(f"{name}: expected real numbers, got {arr.dtype} values")
+    try:
+        return np.ascontiguousarray(arr, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"{name}: expected real numbers ({e})") from None
+
+
+def _count(name: str, v: Any, least: int, most: Optional[int] = None) -> int:
+    """A whole number from ``least`` to ``most``, or a ``ValueError`` naming ``name``."""
+    if isinstance(v, bool) or not isinstance(v, numbers.Integral):
+        raise ValueError(f"{name}: expected a whole number, got {v!r}")
+    v = int(v)
+    if v < least:
+        raise ValueError(f"{name}: expected at least {least}, got {v}")
+    if most is not None and v > most:
+        raise ValueError(f"{name}: expected at most {most}, got {v}")
+    return v
+
+
+def _contacts(contacts: Any) -> list:
+    """The contact list, one dict per contact."""
+    if isinstance(contacts, (Mapping, str, bytes)) or not isinstance(contacts, Iterable):
+        raise ValueError(
+            "contacts: expected a list of contact dicts, one per contact, such as "
+            f"{{'model': 'pcwf', 'mu': 0.5}}; got {type(contacts).__name__}"
+        )
+    return list(contacts)
 
 
 class Problem:
@@ -122,7 +190,11 @@ class Problem:
     def from_dict(cls, d: Mapping, base: Union[str, os.PathLike] = ".") -> "Problem":
         """A problem from a dict in any JSON form; a hand's relative ``model`` path is
         taken relative to ``base``."""
-        return cls(_native.Problem.from_json(_dumps(d), os.fspath(base)))
+        try:
+            return cls(_native.Problem.from_json(_dumps(d), os.fspath(base)))
+        except ValueError as e:
+            # The line and column are those of the JSON written from the dict.
+            raise ValueError(re.sub(r" \(line \d+, column \d+\)$", "", str(e))) from None
 
     @classmethod
     def from_arrays(
@@ -140,10 +212,10 @@ class Problem:
         ``internal_forces``, ``initial_torque``, ``transmission`` (m × a: τ = T u, the
         solve then returns actuator forces u), ``actuator_names``)."""
         d = {
-            "grasp_matrix": np.asarray(grasp_matrix, dtype=float),
-            "jacobian_transpose": np.asarray(jacobian_transpose, dtype=float),
-            "wrench": np.zeros(6) if wrench is None else np.asarray(wrench, dtype=float),
-            "contacts": list(contacts),
+            "grasp_matrix": _real("grasp_matrix", grasp_matrix),
+            "jacobian_transpose": _real("jacobian_transpose", jacobian_transpose),
+            "wrench": np.zeros(6) if wrench is None else _real("wrench", wrench),
+            "contacts": _contacts(contacts),
         }
         d.update(options)
         return cls.from_dict(d)
@@ -245,7 +317,7 @@ class Solver:
 
     def solve(self, wrench=None, warm: bool = True) -> Result:
         if wrench is not None:
-            w = np.asarray(wrench, dtype=float).reshape(-1)
+            w = _real("wrench", wrench).reshape(-1)
             if w.shape != (6,):
                 raise ValueError(
                     f"wrench: expected 6 numbers [Fx, Fy, Fz, Mx, My, Mz], got {w.size}"
@@ -340,9 +412,7 @@ def solve_batch(
     infeasible item never raises: it gets its status code; only arguments that make
     the whole batch impossible (shapes, contacts, options) raise ``ValueError``.
     """
-    G = np.ascontiguousarray(G, dtype=np.float64)
-    JT = np.ascontiguousarray(JT, dtype=np.float64)
-    W = np.ascontiguousarray(W, dtype=np.float64)
+    G, JT, W = _real("G", G), _real("JT", JT), _real("W", W)
     if G.ndim != 3:
         raise ValueError(f"G: expected shape (B, 6, n), got {G.shape}")
     if JT.ndim != 3:
@@ -356,7 +426,7 @@ def solve_batch(
         raise ValueError(f"W: expected shape (B, 6) or (B, K, 6), got {W.shape}")
     B, K, m = G.shape[0], W3.shape[1], JT.shape[1]
     if transmission is not None:
-        transmission = np.asarray(transmission, dtype=np.float64)
+        transmission = _real("transmission", transmission)
         if transmission.ndim != 2 or transmission.shape[0] != m:
             raise ValueError(
                 f"transmission: expected shape ({m}, a), one row per joint of JT, got {transmission.shape}"
@@ -368,22 +438,26 @@ def solve_batch(
     wrench_residual = _out("wrench_residual", wrench_residual, lead, np.float64)
     status = _out("status", status, lead, np.int8)
     spec = {
-        "contacts": list(contacts),
+        "contacts": _contacts(contacts),
         "torque_weights": torque_weights,
         "torque_limits": torque_limits,
         "min_normal_force": min_normal_force,
         "joint_names": None if joint_names is None else list(joint_names),
         "transmission": None if transmission is None else transmission.tolist(),
         "actuator_names": None if actuator_names is None else list(actuator_names),
-        **_settings(backend, cones, sides, latitudes, sfce_spacing, internal_forces, paper_model),
     }
-    if threads is None:
-        threads = _native.default_threads()
+    settings = _settings(backend, cones, sides, latitudes, sfce_spacing, internal_forces, paper_model)
+    threads = (
+        _native.default_threads()
+        if threads is None
+        else _count("threads", threads, 1, _native.MAX_THREADS)
+    )
     errors = _native.solve_batch(
         G,
         JT,
         W3,
         _dumps(spec),
+        _dumps(settings),
         int(threads),
         bool(warm_start),
         torque.reshape((B, K, m)),
@@ -408,6 +482,10 @@ def synthetic_grasps(
     of revolute joints, and the sphere's weight (50–500 g) plus a small disturbance.
     ``wrenches=K > 0`` adds K load directions per grasp (± 10 % of the weight along
     each axis, cycling)."""
+    batch = _count("batch", batch, 0)
+    fingers = _count("fingers", fingers, 1)
+    joints_per_finger = _count("joints_per_finger", joints_per_finger, 1)
+    wrenches = _count("wrenches", wrenches, 0)
     rng = np.random.default_rng(seed)
     n, m = 3 * fingers, fingers * joints_per_finger
     G = np.zeros((batch, 6, n))

@@ -4,8 +4,8 @@
 
 use grasp_torque::{
     file::ContactSpec, file::MatrixFile, for_each_solution, Backend, BatchOptions, BatchSource,
-    Error, GraspProblem, GraspSolver, Matrix, Overrides, ProblemParser, SfceSpacing, Solution,
-    SolverConfig, Status, WarmStart,
+    Error, GraspProblem, GraspSolver, Matrix, Overrides, ProblemError, ProblemParser, SfceSpacing,
+    Solution, SolverConfig, Status, WarmStart,
 };
 use numpy::ndarray::{ArrayView2, ArrayView3, Axis};
 use numpy::{
@@ -21,6 +21,19 @@ use std::sync::{Mutex, OnceLock};
 
 fn invalid(message: impl ToString) -> PyErr {
     PyValueError::new_err(message.to_string())
+}
+
+/// Reads JSON that the Python side wrote from the caller's keywords, naming the field
+/// at fault (`contacts[0].mu`, `sides`); the line and column of that text would mean
+/// nothing to the caller.
+fn from_keywords<'de, T: Deserialize<'de>>(text: &'de str) -> PyResult<T> {
+    grasp_torque::file::from_json_str(text).map_err(|e| match e {
+        ProblemError::Parse { path, message, .. } if !path.is_empty() && path != "." => {
+            invalid(format!("{path}: {message}"))
+        }
+        ProblemError::Parse { message, .. } => invalid(message),
+        e => invalid(e),
+    })
 }
 
 /// Robot files read once per process, shared by every hand-form problem that names them.
@@ -174,7 +187,7 @@ struct Solver {
 impl Solver {
     #[new]
     fn new(problem: &Problem, settings_json: &str) -> PyResult<Self> {
-        let settings: Settings = serde_json::from_str(settings_json).map_err(invalid)?;
+        let settings: Settings = from_keywords(settings_json)?;
         let mut p = problem.inner.clone();
         let config = settings.configure(&mut p)?;
         let solver = GraspSolver::new(&p, &config).map_err(invalid)?;
@@ -529,7 +542,8 @@ fn status_code(s: Status) -> i8 {
 /// Code of an item whose input was rejected.
 const INVALID: i8 = 5;
 
-/// The options every grasp of a batch shares.
+/// The options every grasp of a batch shares (the solver settings come apart, as for
+/// [`Solver`], so that an error names the keyword).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct BatchSpec {
@@ -541,8 +555,6 @@ struct BatchSpec {
     /// T (joints × actuators), shared by every grasp: τ = T u.
     transmission: Option<Vec<Vec<f64>>>,
     actuator_names: Option<Vec<String>>,
-    #[serde(flatten)]
-    settings: Settings,
 }
 
 /// A batch's grasps, read straight from the caller's arrays.
@@ -650,6 +662,7 @@ fn solve_batch(
     jt: PyReadonlyArray3<'_, f64>,
     w: PyReadonlyArray3<'_, f64>,
     spec_json: &str,
+    settings_json: &str,
     threads: usize,
     warm_start: bool,
     mut torque: PyReadwriteArrayDyn<'_, f64>,
@@ -657,7 +670,8 @@ fn solve_batch(
     mut wrench_residual: PyReadwriteArrayDyn<'_, f64>,
     mut status: PyReadwriteArrayDyn<'_, i8>,
 ) -> PyResult<Vec<(usize, usize, String)>> {
-    let spec: BatchSpec = serde_json::from_str(spec_json).map_err(invalid)?;
+    let spec: BatchSpec = from_keywords(spec_json)?;
+    let settings: Settings = from_keywords(settings_json)?;
     let (gv, jv, wv) = (g.as_array(), jt.as_array(), w.as_array());
     let (b, six, n) = gv.dim();
     let (bj, m, nj) = jv.dim();
@@ -714,7 +728,14 @@ fn solve_batch(
     }
     .apply(&mut template)
     .map_err(invalid)?;
-    let config = spec.settings.configure(&mut template)?;
+    let config = settings.configure(&mut template)?;
+    // What every grasp shares is checked once, against the arrays' shapes: contacts
+    // that do not add up to G's columns, or weights of the wrong length, make the
+    // whole batch impossible (an error, not B invalid items).
+    let mut shared = template.clone();
+    shared.grasp_matrix = Matrix::zeros(6, n);
+    shared.jacobian_transpose = Matrix::zeros(m, n);
+    shared.validate().map_err(invalid)?;
     if threads == 0 {
         return Err(invalid("threads: expected at least 1 worker thread, got 0"));
     }
@@ -777,6 +798,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(default_threads, m)?)?;
     m.add_function(wrap_pyfunction!(backends, m)?)?;
     m.add("INVALID", INVALID)?;
+    m.add("MAX_THREADS", grasp_torque::batch::MAX_THREADS)?;
     m.add("VERSION", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

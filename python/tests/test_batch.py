@@ -9,6 +9,7 @@ import subprocess
 import sys
 import threading
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -103,6 +104,45 @@ def test_status_codes_for_infeasible_and_invalid_items():
         gt.solve_batch(G, JT, W, PCWF, threads=0)
     with pytest.raises(ValueError, match="at most 1024"):
         gt.solve_batch(G, JT, W, PCWF, threads=10**6)
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (lambda a: {**a, "G": a["G"].astype(complex)}, "G: expected real numbers, got complex"),
+        (lambda a: {**a, "W": a["W"].astype(str)}, "W: expected real numbers"),
+        (lambda a: {**a, "JT": [[1.0, 2.0], [3.0]]}, "JT: expected a rectangular array"),
+        (lambda a: {**a, "contacts": PCWF[0]}, "contacts: expected a list of contact dicts"),
+        (lambda a: {**a, "contacts": None}, "contacts: expected a list"),
+        (lambda a: {**a, "contacts": PCWF[:2]}, "contacts: expected models whose force components"),
+        (lambda a: {**a, "contacts": [{"model": "pcwf", "mu": np.nan}] * 3}, "contacts\\[0\\].mu: expected a finite number, got nan"),
+        (lambda a: {**a, "contacts": [{"model": "pcwf", "mu": "a"}] * 3}, "contacts\\[0\\].mu: invalid type"),
+        (lambda a: {**a, "torque_weights": [1.0] * 8}, "torque_weights: expected one value per joint"),
+        (lambda a: {**a, "torque_weights": [1.0] * 8 + [np.inf]}, "torque_weights\\[8\\]: expected a finite number, got inf"),
+        (lambda a: {**a, "transmission": np.full((9, 2), np.nan)}, "transmission\\[0\\]\\[0\\]: expected a finite number"),
+        (lambda a: {**a, "threads": -1}, "threads: expected at least 1, got -1"),
+        (lambda a: {**a, "threads": 2.5}, "threads: expected a whole number, got 2.5"),
+        (lambda a: {**a, "sides": 8.5}, "sides: invalid type: floating point `8.5`"),
+    ],
+)
+def test_bad_arguments_raise_naming_the_argument(change, message):
+    """An argument every grasp shares, when wrong, is one error naming it (not B
+    invalid items, a numpy warning or a JSON parse error), before anything is solved."""
+    G, JT, W = gt.synthetic_grasps(3, seed=2)
+    args = change({"G": G, "JT": JT, "W": W, "contacts": PCWF})
+    G, JT, W, contacts = (args.pop(k) for k in ("G", "JT", "W", "contacts"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no ComplexWarning on the way to the error
+        with pytest.raises(ValueError, match=message):
+            gt.solve_batch(G, JT, W, contacts, **args)
+
+
+def test_synthetic_grasps_checks_its_counts():
+    with pytest.raises(ValueError, match="batch: expected at least 0, got -1"):
+        gt.synthetic_grasps(-1)
+    with pytest.raises(ValueError, match="fingers: expected a whole number"):
+        gt.synthetic_grasps(2, fingers=2.5)
+    assert gt.synthetic_grasps(0)[0].shape == (0, 6, 9)
 
 
 def test_preallocated_outputs_are_filled_in_place():

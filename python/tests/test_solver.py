@@ -153,8 +153,26 @@ def test_invalid_input_raises_the_cli_message(cli, root, tmp_path):
         gt.Solver(root / "fixtures" / "hand3-pcwf.json").solve([1, 2, 3])
     with pytest.raises(ValueError, match="wrench\\[0\\]"):
         gt.Solver(root / "fixtures" / "hand3-pcwf.json").solve([np.nan, 0, 0, 0, 0, 0])
-    with pytest.raises(ValueError, match="finite"):
+    with pytest.raises(ValueError, match="grasp_matrix\\[0\\]\\[0\\]: expected a finite number, got nan"):
         gt.Problem.from_arrays(np.full((6, 3), np.nan), np.ones((1, 3)), [{"model": "pcwf", "mu": 1}])
+    # Each argument named, whatever went wrong with it.
+    solver = gt.Solver(root / "fixtures" / "hand3-pcwf.json")
+    with pytest.raises(ValueError, match="wrench: expected real numbers, got complex"):
+        solver.solve(np.ones(6) * 1j)
+    with pytest.raises(ValueError, match="wrench: expected real numbers"):
+        solver.solve(["a"] * 6)
+    with pytest.raises(ValueError, match="sides: invalid type: floating point `8.5`"):
+        gt.Solver(root / "fixtures" / "hand3-pcwf.json", sides=8.5)
+    with pytest.raises(ValueError, match="latitudes: invalid type: string"):
+        gt.Solver(root / "fixtures" / "hand3-pcwf.json", latitudes="2")
+    with pytest.raises(ValueError, match="contacts\\[1\\].mu: invalid type: string \"a\", expected f64$"):
+        gt.Problem.from_dict({**bad, "contacts": [{"model": "pcwf", "mu": 1}, {"model": "pcwf", "mu": "a"}, {"model": "pcwf", "mu": 1}]})
+    with pytest.raises(ValueError, match="wrench\\[2\\]: expected a finite number, got inf"):
+        gt.Problem.from_dict({**bad, "wrench": [0, 0, np.inf, 0, 0, 0]})
+    with pytest.raises(ValueError, match="jacobian_transpose: expected real numbers"):
+        gt.Problem.from_arrays(np.ones((6, 3)), np.ones((1, 3), dtype=complex), [{"model": "pcwf", "mu": 1}])
+    with pytest.raises(ValueError, match="contacts: expected a list of contact dicts"):
+        gt.Problem.from_arrays(np.ones((6, 3)), np.ones((1, 3)), {"model": "pcwf", "mu": 1})
 
 
 def test_infeasible_is_a_result_not_an_exception(root):
