@@ -44,9 +44,7 @@ use grasp_core::{
     TorqueSolver, WarmStart,
 };
 
-/// Relative tolerance of the optimality certificate (each measure against the size of
-/// its own terms, on the scaled problem).
-pub const CERTIFICATE_TOLERANCE: f64 = 1e-9;
+pub use grasp_core::conic::CERTIFICATE_TOLERANCE;
 
 /// Sides of the polygons of the feasibility proofs.
 const PROOF_SIDES: usize = 8;

@@ -10,8 +10,12 @@ use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettings, DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
 };
+use grasp_core::conic::CERTIFICATE_TOLERANCE;
+use grasp_core::linalg::{decompose, RankThreshold};
+use grasp_core::matrix::norm2;
 use grasp_core::{
-    Capabilities, ConeKind, ConicForm, Reason, Solution, Status, TorqueQp, TorqueSolver, WarmStart,
+    Capabilities, ConeKind, ConicForm, Matrix, Reason, Solution, Status, TorqueQp, TorqueSolver,
+    WarmStart,
 };
 
 /// What the Clarabel backend supports.
@@ -81,6 +85,10 @@ pub struct ClarabelSolver {
     b: Vec<f64>,
     cones: Vec<SupportedConeT<f64>>,
     solver: Option<DefaultSolver<f64>>,
+    /// The polished answer ([`ClarabelSolver::polish`]) and the certificate's scratch.
+    polished_x: Vec<f64>,
+    polished_z: Vec<f64>,
+    scratch: Vec<f64>,
 }
 
 impl ClarabelSolver {
@@ -120,6 +128,9 @@ impl ClarabelSolver {
             a,
             cones,
             solver: None,
+            polished_x: Vec::new(),
+            polished_z: Vec::new(),
+            scratch: Vec::new(),
             conic,
             qp,
         })
@@ -190,12 +201,113 @@ impl ClarabelSolver {
         Ok(())
     }
 
+    /// Polishes the last answer, as OSQP does: the equalities and the inequality rows
+    /// it holds with equality (multiplier above slack) are solved as equalities, by
+    /// least norm (the objective is ‖x‖²), with multipliers from stationarity,
+    /// `2x = −A_Eᵀ z_E`. The point is kept, in `polished_x` and `polished_z`, only if the
+    /// conic form's certificate passes from scratch: then it is the optimum to
+    /// rounding, where the interior point stops at its tolerance. A row far steeper
+    /// than the rest (a thin torsional cone, `mu_torsion` 1e-5 of the lever arms, or
+    /// torque weights 1e8 apart) amplifies that tolerance past the core's check, and a
+    /// stalled run often has the right rows too. A row whose multiplier comes out
+    /// negative (weakly active: Clarabel's is near zero) leaves, and the rest are solved
+    /// again, a few times at most. Linear rows without free internal forces only: a
+    /// second-order cone's boundary is not a row, and free internal forces carry no
+    /// curvature.
+    fn polish(&mut self) -> bool {
+        let c = &self.conic;
+        let Some(sol) = self.solver.as_ref().map(|s| &s.solution) else {
+            return false;
+        };
+        let eq = match c.cones.first() {
+            Some(&ConeKind::Zero(p)) => p,
+            _ => 0,
+        };
+        let finite = |v: &[f64]| v.iter().all(|v| v.is_finite());
+        if c.free > 0
+            || c.cones
+                .iter()
+                .any(|k| matches!(k, ConeKind::SecondOrder(_)))
+            || sol.x.len() != c.nx
+            || !(finite(&sol.x) && finite(&sol.z) && finite(&sol.s))
+        {
+            return false;
+        }
+        let (nx, rows) = (c.nx, c.rows());
+        let mut held: Vec<bool> = (0..rows)
+            .map(|i| i < eq || (sol.z[i] > sol.s[i] && self.b[i].is_finite()))
+            .collect();
+        let (x, z) = (&mut self.polished_x, &mut self.polished_z);
+        for _ in 0..POLISH_ROUNDS {
+            // The rows held, each normalised (which leaves the least-norm point and
+            // the multipliers alone, and makes the rank decision unit-free); Clarabel's
+            // multipliers scale with the norms.
+            let (mut data, mut be, mut which) = (Vec::new(), Vec::new(), Vec::new());
+            for i in (0..rows).filter(|&i| held[i]) {
+                let row = c.a.row(i);
+                let nrm = norm2(row);
+                if nrm > 0.0 {
+                    data.extend(row.iter().map(|v| v / nrm));
+                    be.push(self.b[i] / nrm);
+                    which.push((i, nrm, sol.z[i] * nrm));
+                }
+            }
+            x.clear();
+            x.resize(nx, 0.0);
+            z.clear();
+            z.resize(rows, 0.0);
+            if !which.is_empty() {
+                let ae = Matrix::from_rows_data(which.len(), nx, data);
+                let Ok(dec) = decompose(&ae, RankThreshold::Relative(1e3 * f64::EPSILON)) else {
+                    return false;
+                };
+                // x = A_E⁺ b_E, and Clarabel's multipliers moved least onto stationarity,
+                // z_E − (A_E⁺)ᵀ (A_Eᵀ z_E + 2x): at a degenerate vertex (dependent rows)
+                // the least-norm multipliers can be negative where Clarabel's are not.
+                let pinv = dec.pseudo_inverse();
+                for (j, xj) in x.iter_mut().enumerate() {
+                    *xj = pinv.row(j).iter().zip(&be).map(|(p, b)| p * b).sum();
+                }
+                let mut res: Vec<f64> = x.iter().map(|v| 2.0 * v).collect();
+                for (row, &(_, _, zr)) in ae.as_slice().chunks_exact(nx).zip(&which) {
+                    for (r, a) in res.iter_mut().zip(row) {
+                        *r += a * zr;
+                    }
+                }
+                for (r, &(i, nrm, zr)) in which.iter().enumerate() {
+                    let step: f64 = (0..nx).map(|j| pinv[(j, r)] * res[j]).sum();
+                    z[i] = (zr - step) / nrm;
+                }
+            }
+            if c.certificate(&self.b, x, z, CERTIFICATE_TOLERANCE, &mut self.scratch)
+                .passed
+            {
+                return true;
+            }
+            let mut dropped = false;
+            for i in eq..rows {
+                if held[i] && z[i] < 0.0 {
+                    held[i] = false;
+                    dropped = true;
+                }
+            }
+            if !dropped {
+                return false;
+            }
+        }
+        false
+    }
+
     fn status(&self) -> SolverStatus {
         self.solver
             .as_ref()
             .map_or(SolverStatus::Unsolved, |s| s.solution.status)
     }
 }
+
+/// Most times [`ClarabelSolver::polish`] drops the rows whose multipliers come out
+/// negative and solves again.
+const POLISH_ROUNDS: usize = 3;
 
 /// A torque limit's row whose scaled right-hand side exceeds this (the other rows'
 /// are at most 1) is relaxed first ([`ClarabelSolver`]'s `solve_raw`).
@@ -270,7 +382,7 @@ impl TorqueSolver for ClarabelSolver {
         let sol = &solver.solution;
         out.iterations = sol.iterations as usize;
         let exact = self.qp.constraints.has_exact();
-        let (status, reason) = match sol.status {
+        let (mut status, mut reason) = match sol.status {
             SolverStatus::Solved => (Status::Optimal, None),
             SolverStatus::AlmostSolved => (Status::AlmostOptimal, None),
             SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => (
@@ -287,16 +399,37 @@ impl TorqueSolver for ClarabelSolver {
             ),
             other => (Status::NumericalFailure, backend(format!("stopped: {other:?}"))),
         };
+        // Polished where Clarabel ran to an end with an answer, or stalled near one
+        // (not where it proved infeasibility): against the limits as they are.
+        let polished =
+            status != Status::Infeasible && !matches!(sol.status, SolverStatus::Unsolved) && {
+                if relaxed {
+                    self.conic.b_into(w, &mut self.b);
+                }
+                self.polish()
+            };
+        if polished {
+            (status, reason) = (Status::Optimal, None);
+            out.method = Some("polished");
+        }
         out.status = status;
         out.reason = reason;
         if status.has_answer() {
+            let Some(sol) = self.solver.as_ref().map(|s| &s.solution) else {
+                return;
+            };
+            let (x, z) = if polished {
+                (&self.polished_x, &self.polished_z)
+            } else {
+                (&sol.x, &sol.z)
+            };
             self.conic
-                .unscale_into(&sol.x, alpha, &mut out.torque, &mut out.internal_forces);
+                .unscale_into(x, alpha, &mut out.torque, &mut out.internal_forces);
             if !exact {
                 // μ_i = z_i ρ_i α κ for Σ w τ² on the rows H τ ≥ c.
                 let (c, rows) = (&self.conic, self.qp.inequality_rows());
                 out.multipliers.extend(
-                    (0..rows).map(|i| sol.z[c.linear_at + i] * c.row_scale[i] * alpha * c.kappa),
+                    (0..rows).map(|i| z[c.linear_at + i] * c.row_scale[i] * alpha * c.kappa),
                 );
             }
         }

@@ -683,6 +683,11 @@ pub struct RayCheck {
 /// be: clearly negative, not rounding.
 pub const RAY_MARGIN: f64 = 1e3;
 
+/// Relative tolerance of the optimality certificate, [`ConicForm::certificate`] (each
+/// measure against the size of its own terms, on the scaled problem), with which the
+/// solvers check an answer before they call it optimal.
+pub const CERTIFICATE_TOLERANCE: f64 = 1e-9;
+
 /// The outcome of [`ConicForm::certificate`]: each measure relative to its terms.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Certificate {

@@ -311,7 +311,8 @@ pub struct Solution {
     pub iterations: usize,
     /// Which of the backend's methods produced the answer, when it has several: the
     /// native exact-cone solver's `newton` (active-set Newton from the linearised
-    /// optimum) or `interior_point` (its fallback).
+    /// optimum) or `interior_point` (its fallback); `polished` for a Clarabel answer
+    /// whose rows held with equality were solved exactly and certified.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub method: Option<&'static str>,
     /// The final key constraint set: linear rows active at τ, when the backend has one
