@@ -208,12 +208,12 @@ impl ClarabelSolver {
     /// conic form's certificate passes from scratch: then it is the optimum to
     /// rounding, where the interior point stops at its tolerance. A row far steeper
     /// than the rest (a thin torsional cone, `mu_torsion` 1e-5 of the lever arms, or
-    /// torque weights 1e8 apart) amplifies that tolerance past the core's check, and a
-    /// stalled run often has the right rows too. A row whose multiplier comes out
-    /// negative (weakly active: Clarabel's is near zero) leaves, and the rest are solved
-    /// again, a few times at most. Linear rows without free internal forces only: a
-    /// second-order cone's boundary is not a row, and free internal forces carry no
-    /// curvature.
+    /// torque weights 1e8 apart) amplifies that tolerance past the core's check. (A
+    /// stalled run is polished too: if its rows are right, the certificate says so.) A
+    /// row whose multiplier comes out negative (weakly active: Clarabel's is near zero)
+    /// leaves, and the rest are solved again, a few times at most. Linear rows without
+    /// free internal forces only: a second-order cone's boundary is not a row, and free
+    /// internal forces carry no curvature.
     fn polish(&mut self) -> bool {
         let c = &self.conic;
         let Some(sol) = self.solver.as_ref().map(|s| &s.solution) else {
