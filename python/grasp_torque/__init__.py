@@ -148,6 +148,18 @@ def _count(name: str, v: Any, least: int, most: Optional[int] = None) -> int:
     return v
 
 
+def _limits(limits: Any) -> Any:
+    """Torque limits as the files write them: ``None`` (JSON ``null``) for a joint
+    without one, which numpy users write ``inf``."""
+    if limits is None or isinstance(limits, str):
+        return limits
+    if hasattr(limits, "tolist"):
+        limits = limits.tolist()
+    if not isinstance(limits, (list, tuple)):
+        return limits
+    return [None if isinstance(v, float) and v == math.inf else v for v in limits]
+
+
 def _contacts(contacts: Any) -> list:
     """The contact list, one dict per contact."""
     if isinstance(contacts, (Mapping, str, bytes)) or not isinstance(contacts, Iterable):
@@ -208,8 +220,8 @@ class Problem:
         """A matrix-form problem: G (6 × n), Jᵀ (m × n), one contact dict per contact
         (``{"model": "pcwf", "mu": 0.5}``; ``sfcl``/``sfce`` add ``mu_torsion``), the
         wrench (default zero) and any option of the matrix form (``torque_weights``,
-        ``torque_limits``, ``min_normal_force``, ``joint_names``, ``linearization``,
-        ``internal_forces``, ``initial_torque``, ``transmission`` (m × a: τ = T u, the
+        ``torque_limits`` (``None`` or ``inf`` for a joint without one),
+        ``min_normal_force``, ``joint_names``, ``linearization``, ``internal_forces``, ``initial_torque``, ``transmission`` (m × a: τ = T u, the
         solve then returns actuator forces u), ``actuator_names``)."""
         d = {
             "grasp_matrix": _real("grasp_matrix", grasp_matrix),
@@ -218,6 +230,8 @@ class Problem:
             "contacts": _contacts(contacts),
         }
         d.update(options)
+        if "torque_limits" in d:
+            d["torque_limits"] = _limits(d["torque_limits"])
         return cls.from_dict(d)
 
     def to_dict(self) -> dict:
@@ -400,8 +414,8 @@ def solve_batch(
     ``G[B,6,n]`` and ``JT[B,m,n]`` are the grasps; ``W[B,6]`` gives one wrench per grasp
     and ``W[B,K,6]`` K of them (each grasp's model is built once and its wrenches are
     solved in order, each warm-started from the previous answer unless
-    ``warm_start=False``). ``contacts``, the limits, weights and minimum normal forces
-    are shared by every grasp. ``threads`` defaults to one per core. A
+    ``warm_start=False``). ``contacts``, the limits (``None`` or ``inf`` for a joint
+    without one), weights and minimum normal forces are shared by every grasp. ``threads`` defaults to one per core. A
     ``transmission`` T (m × a, shared: an MJCF hand's moment arms do not depend on the
     configuration) makes the outputs actuator forces u, ``torque[B,(K,)a]``, with the
     weights and limits per actuator.
@@ -440,7 +454,7 @@ def solve_batch(
     spec = {
         "contacts": _contacts(contacts),
         "torque_weights": torque_weights,
-        "torque_limits": torque_limits,
+        "torque_limits": _limits(torque_limits),
         "min_normal_force": min_normal_force,
         "joint_names": None if joint_names is None else list(joint_names),
         "transmission": None if transmission is None else transmission.tolist(),

@@ -137,6 +137,24 @@ def test_bad_arguments_raise_naming_the_argument(change, message):
             gt.solve_batch(G, JT, W, contacts, **args)
 
 
+def test_inf_is_no_torque_limit():
+    """numpy's ``inf`` means what the files' ``null`` does: that joint is unlimited."""
+    G, JT, W = gt.synthetic_grasps(4, seed=3)
+    m = JT.shape[1]
+    free = gt.solve_batch(G, JT, W, PCWF)
+    limits = np.full(m, np.inf)
+    same = gt.solve_batch(G, JT, W, PCWF, torque_limits=limits)
+    assert (same.status == free.status).all() and np.array_equal(same.torque, free.torque)
+    limits[0] = 1e-3 * np.abs(free.torque[:, 0]).max()  # one joint limited, binding
+    tight = gt.solve_batch(G, JT, W, PCWF, torque_limits=limits)
+    held = tight.status == 0
+    assert (np.abs(tight.torque[held, 0]) <= limits[0] * (1 + 1e-9)).all()
+    p = gt.Problem.from_arrays(G[0], JT[0], PCWF, W[0], torque_limits=limits)
+    assert p.to_dict()["torque_limits"][1:] == [None] * (m - 1)
+    with pytest.raises(ValueError, match="torque_limits\\[0\\]: expected a finite number, got -inf"):
+        gt.solve_batch(G, JT, W, PCWF, torque_limits=[-np.inf] + [None] * (m - 1))
+
+
 def test_synthetic_grasps_checks_its_counts():
     with pytest.raises(ValueError, match="batch: expected at least 0, got -1"):
         gt.synthetic_grasps(-1)
