@@ -1,7 +1,7 @@
 //! A proptest-based fuzzer (cargo-fuzz needs a nightly toolchain, which this project
 //! does not assume). Two targets, each from fixed seeds so CI and every developer see
 //! the same cases; `GRASP_FUZZ_CASES` raises the case count for a longer run
-//! (`.ci/run` runs a time-bounded one).
+//! (`.ci/run` runs a time-bounded one), and `GRASP_FUZZ_SEED` draws other cases.
 //!
 //! - **The parser**: mutations of the bundled fixtures and of the corpus of hostile
 //!   inputs in `fixtures/fuzz/` (bytes flipped, cut or inserted; numbers replaced by
@@ -27,6 +27,14 @@ fn cases(default: u32) -> u32 {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(default)
+}
+
+/// The cases' seed: 1414, or `GRASP_FUZZ_SEED` for others.
+fn seed() -> u64 {
+    std::env::var("GRASP_FUZZ_SEED")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1414)
 }
 
 fn corpus() -> Vec<String> {
@@ -138,7 +146,7 @@ fn check_answer(p: &GraspProblem, backend: Backend, cones: Cones, wrench: &[f64;
 proptest! {
     #![proptest_config(ProptestConfig {
         cases: cases(300),
-        rng_seed: proptest::test_runner::RngSeed::Fixed(1414),
+        rng_seed: proptest::test_runner::RngSeed::Fixed(seed()),
         failure_persistence: None,
         ..ProptestConfig::default()
     })]
