@@ -257,7 +257,8 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
             model.internal_forces.name()
         );
     }
-    let _ = writeln!(o, "backend   {backend}, {cones} cones");
+    let method = s.method.map(|m| format!(" ({m})")).unwrap_or_default();
+    let _ = writeln!(o, "backend   {backend}, {cones} cones{method}");
     let _ = writeln!(o, "status    {}", s.status);
     if let Some(r) = &s.reason {
         let _ = writeln!(o, "reason    {r}");
@@ -429,7 +430,7 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
     if qp.constraints.has_exact() {
         let _ = writeln!(
             o,
-            "  max(g(f) − fz) {:>7}   (exact cones, ≤ 0 inside: {})",
+            "  max(g − fz) {:>10}   (exact cones, g the cone's gauge, ≤ 0 inside: {})",
             g(d.cone_violation, 3),
             verdict(d.cone_violation)
         );
