@@ -221,8 +221,9 @@ class Problem:
         (``{"model": "pcwf", "mu": 0.5}``; ``sfcl``/``sfce`` add ``mu_torsion``), the
         wrench (default zero) and any option of the matrix form (``torque_weights``,
         ``torque_limits`` (``None`` or ``inf`` for a joint without one),
-        ``min_normal_force``, ``joint_names``, ``linearization``, ``internal_forces``, ``initial_torque``, ``transmission`` (m × a: τ = T u, the
-        solve then returns actuator forces u), ``actuator_names``)."""
+        ``min_normal_force``, ``joint_names``, ``linearization``, ``internal_forces``,
+        ``initial_torque``, ``transmission`` (m × a: τ = T u, the solve then returns
+        actuator forces u), ``actuator_names``)."""
         d = {
             "grasp_matrix": _real("grasp_matrix", grasp_matrix),
             "jacobian_transpose": _real("jacobian_transpose", jacobian_transpose),
