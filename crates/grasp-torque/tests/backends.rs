@@ -4,21 +4,11 @@
 
 use grasp_testkit::{synthetic_grasp, SynthSpec};
 use grasp_torque::matrix::norm_inf;
-use grasp_torque::{
-    solve, Backend, Cones, GraspProblem, Solution, SolverConfig, Status, WarmStart,
-};
+use grasp_torque::{Backend, Cones, GraspProblem, Solution, Status};
 use proptest::prelude::*;
 
-fn run(p: &GraspProblem, backend: Backend, cones: Cones) -> Solution {
-    let config = SolverConfig {
-        backend: Some(backend),
-        cones,
-        ..Default::default()
-    };
-    let qp = config.qp(p).unwrap();
-    let mut s = config.build(qp).unwrap();
-    solve(s.as_mut(), &p.wrench, &WarmStart::default()).unwrap()
-}
+mod common;
+use common::run;
 
 fn problem(seed: u64, sides: usize) -> GraspProblem {
     let mut spec = SynthSpec::default();

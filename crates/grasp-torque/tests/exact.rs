@@ -7,20 +7,11 @@
 
 use grasp_testkit::sweep_grasp as grasp;
 use grasp_torque::{
-    solve, Backend, Cones, GraspProblem, GraspSolver, Reason, Solution, SolverConfig, Status,
-    WarmStart,
+    Backend, Cones, GraspProblem, GraspSolver, Reason, Solution, SolverConfig, Status, WarmStart,
 };
 
-fn run(p: &GraspProblem, backend: Backend, cones: Cones) -> Solution {
-    let c = SolverConfig {
-        backend: Some(backend),
-        cones,
-        ..Default::default()
-    };
-    let qp = c.qp(p).unwrap();
-    let mut s = c.build(qp).unwrap();
-    solve(s.as_mut(), &p.wrench, &WarmStart::default()).unwrap()
-}
+mod common;
+use common::run;
 
 /// A bundled fixture.
 fn fixture(name: &str) -> GraspProblem {

@@ -8,20 +8,11 @@
 
 use grasp_testkit::{synthetic_grasp, ModelMix, Rng, SynthSpec};
 use grasp_torque::file::ModelName;
-use grasp_torque::{
-    solve, Backend, Cones, GraspProblem, Matrix, Solution, SolverConfig, WarmStart,
-};
+use grasp_torque::{Backend, Cones, GraspProblem, Matrix, Solution};
 use proptest::prelude::*;
 
-fn run(p: &GraspProblem, backend: Backend, cones: Cones) -> Solution {
-    let config = SolverConfig {
-        backend: Some(backend),
-        cones,
-        ..Default::default()
-    };
-    let mut s = config.build(config.qp(p).unwrap()).unwrap();
-    solve(s.as_mut(), &p.wrench, &WarmStart::default()).unwrap()
-}
+mod common;
+use common::run;
 
 /// The backends and cone kinds, each with the accuracy its answers are certified to:
 /// the native solver's certificate (1e-9, both kinds), Clarabel's linearised answers

@@ -6,7 +6,10 @@
 #![cfg(all(feature = "active-set", feature = "clarabel"))]
 
 use grasp_testkit::rescale;
-use grasp_torque::{solve, Backend, Cones, GraspProblem, Solution, SolverConfig, WarmStart};
+use grasp_torque::{Backend, Cones, GraspProblem, Solution};
+
+mod common;
+use common::run;
 
 fn fixtures() -> Vec<(String, GraspProblem)> {
     let mut out: Vec<_> = grasp_testkit::fixture_paths(&["", "table1", "geometry"])
@@ -22,16 +25,6 @@ fn fixtures() -> Vec<(String, GraspProblem)> {
         .collect();
     out.sort_by(|a, b| a.0.cmp(&b.0));
     out
-}
-
-fn run(p: &GraspProblem, backend: Backend, cones: Cones) -> Solution {
-    let config = SolverConfig {
-        backend: Some(backend),
-        cones,
-        ..Default::default()
-    };
-    let mut s = config.build(config.qp(p).unwrap()).unwrap();
-    solve(s.as_mut(), &p.wrench, &WarmStart::default()).unwrap()
 }
 
 #[test]

@@ -6,21 +6,11 @@
 use grasp_testkit::{synthetic_grasp, Rng, SynthSpec};
 use grasp_torque::matrix::{norm_inf, Matrix};
 use grasp_torque::problem::Transmission;
-use grasp_torque::{
-    solve, Backend, Cones, GraspProblem, Reason, Solution, SolverConfig, Status, WarmStart,
-};
+use grasp_torque::{Backend, Cones, GraspProblem, Reason, Solution, Status};
 use proptest::prelude::*;
 
-fn run(p: &GraspProblem, backend: Backend, cones: Cones) -> Solution {
-    let config = SolverConfig {
-        backend: Some(backend),
-        cones,
-        ..Default::default()
-    };
-    let qp = config.qp(p).unwrap();
-    let mut s = config.build(qp).unwrap();
-    solve(s.as_mut(), &p.wrench, &WarmStart::default()).unwrap()
-}
+mod common;
+use common::run;
 
 fn grasp(seed: u64) -> GraspProblem {
     synthetic_grasp(seed, &SynthSpec::default())
