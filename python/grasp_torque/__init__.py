@@ -46,6 +46,8 @@ from . import _native
 __all__ = [
     "Problem",
     "Solver",
+    "Hand",
+    "HandBatchResult",
     "Result",
     "solve_batch",
     "BatchResult",
@@ -482,6 +484,176 @@ def solve_batch(
     )
     errs = {(g, k) if not single else g: msg for g, k, msg in errors}
     return BatchResult(torque, objective, wrench_residual, status, errs)
+
+
+HandBatchResult = namedtuple(
+    "HandBatchResult", ["torque", "objective", "wrench_residual", "status", "errors", "names"]
+)
+HandBatchResult.__doc__ = """``BatchResult`` with ``names``: the joints (or, for an MJCF hand with
+actuators, the actuators) of ``torque``'s last axis, in order."""
+
+
+class Hand:
+    """A robot hand from a URDF or MJCF file, parsed once per process: where a grasp
+    planner that tries many configurations and contact points of one hand starts.
+
+    ``Hand(path).solve_batch(joint_positions, W, contacts, positions=..., normals=...)``
+    builds each grasp's G and Jᵀ from the hand's kinematics in Rust, in parallel with
+    the GIL released, and solves it, as ``solve_batch`` does for arrays. The contacts
+    are the hand form's (``docs/hands.md``), fixed for the batch: each names a ``link``
+    or ``site``, with ``model``, ``mu``, ``mu_torsion`` and optionally ``frame``
+    (``"object"`` or ``"link"``), ``position`` and ``normal``.
+    """
+
+    def __init__(self, path: Union[str, os.PathLike]):
+        self._path = os.fspath(path)
+        self._native = _native.Hand(self._path)
+
+    @property
+    def name(self) -> str:
+        """The robot's (or MJCF model's) name."""
+        return self._native.name
+
+    @property
+    def joint_names(self) -> list:
+        """The independent joints (neither fixed nor mimic), in file order: the columns
+        of ``joint_positions``."""
+        return self._native.joint_names
+
+    @property
+    def links(self) -> list:
+        """The links (MJCF bodies), in file order."""
+        return self._native.links
+
+    @property
+    def sites(self) -> list:
+        """The MJCF sites."""
+        return self._native.sites
+
+    @property
+    def warnings(self) -> list:
+        """What reading the file ignored or found suspicious, one line each."""
+        return self._native.warnings
+
+    def __reduce__(self):
+        return (Hand, (self._path,))
+
+    def __repr__(self) -> str:
+        return repr(self._native)
+
+    def solve_batch(
+        self,
+        joint_positions,
+        W,
+        contacts: Sequence[Mapping],
+        *,
+        positions=None,
+        normals=None,
+        object_pose=None,
+        backend: Optional[str] = None,
+        cones: str = "linear",
+        sides: Optional[int] = None,
+        latitudes: Optional[int] = None,
+        sfce_spacing: Optional[str] = None,
+        internal_forces: Optional[str] = None,
+        paper_model: bool = False,
+        torque_weights=None,
+        torque_limits=None,
+        min_normal_force=None,
+        threads: Optional[int] = None,
+        warm_start: bool = True,
+        torque: Optional[np.ndarray] = None,
+        objective: Optional[np.ndarray] = None,
+        wrench_residual: Optional[np.ndarray] = None,
+        status: Optional[np.ndarray] = None,
+    ) -> HandBatchResult:
+        """Solves B grasps of this hand, each for one or K wrenches, in parallel.
+
+        Grasp b is the hand at ``joint_positions[b]`` (``[B, len(joint_names)]``,
+        radians or metres; MuJoCo's ``qpos`` for an MJCF hand), its contacts at
+        ``positions[b]`` with normals ``normals[b]`` (``[B, k, 3]``, each in its
+        contact's ``frame``; a row of NaN, or no array, takes the contact dict's own, or
+        the site's), and the object frame at ``object_pose`` (``[7]`` for every grasp or
+        ``[B, 7]``, ``[x, y, z, qw, qx, qy, qz]`` in the root link's frame; default the
+        root frame). ``W`` is ``[B, 6]`` or ``[B, K, 6]`` in the object frame.
+
+        Every grasp has the same joints: the independent joints that move a contact's
+        link (and those an actuator on them drives). ``names`` lists them, the last axis
+        of ``torque``; an MJCF hand with actuators gives actuator forces.
+        ``torque_limits="model"`` takes the file's limits. The solver keywords,
+        ``threads``, ``warm_start`` and the preallocated outputs are ``solve_batch``'s.
+        A grasp whose input is rejected (a NaN joint position, a normal that is not
+        unit) is an ``invalid`` item with its message in ``errors``; only arguments that
+        make the whole batch impossible raise ``ValueError``.
+        """
+        q = _real("joint_positions", joint_positions)
+        W = _real("W", W)
+        if q.ndim != 2:
+            raise ValueError(
+                f"joint_positions: expected shape (B, {len(self.joint_names)}), got {q.shape}"
+            )
+        single = W.ndim == 2
+        if single:
+            W3 = W.reshape(W.shape[0], 1, W.shape[1])
+        elif W.ndim == 3:
+            W3 = W
+        else:
+            raise ValueError(f"W: expected shape (B, 6) or (B, K, 6), got {W.shape}")
+        B, K = q.shape[0], W3.shape[1]
+        arrays = {}
+        for name, a in (("positions", positions), ("normals", normals)):
+            if a is not None:
+                a = _real(name, a)
+                if a.ndim != 3:
+                    raise ValueError(f"{name}: expected shape (B, k, 3), got {a.shape}")
+            arrays[name] = a
+        if object_pose is not None:
+            object_pose = _real("object_pose", object_pose)
+            if object_pose.shape == (7,):
+                object_pose = np.ascontiguousarray(np.broadcast_to(object_pose, (B, 7)))
+            elif object_pose.ndim != 2:
+                raise ValueError(
+                    f"object_pose: expected shape (7,) or ({B}, 7), [x, y, z, qw, qx, qy, qz], got {object_pose.shape}"
+                )
+        spec = {
+            "contacts": _contacts(contacts),
+            "torque_weights": torque_weights,
+            "torque_limits": _limits(torque_limits),
+            "min_normal_force": min_normal_force,
+        }
+        settings = _settings(
+            backend, cones, sides, latitudes, sfce_spacing, internal_forces, paper_model
+        )
+        spec_json, settings_json = _dumps(spec), _dumps(settings)
+        names, _ = self._native.layout(spec_json, settings_json)
+        m = len(names)
+        lead = (B,) if single else (B, K)
+        torque = _out("torque", torque, lead + (m,), np.float64)
+        objective = _out("objective", objective, lead, np.float64)
+        wrench_residual = _out("wrench_residual", wrench_residual, lead, np.float64)
+        status = _out("status", status, lead, np.int8)
+        threads = (
+            _native.default_threads()
+            if threads is None
+            else _count("threads", threads, 1, _native.MAX_THREADS)
+        )
+        errors = self._native.solve_batch(
+            q,
+            W3,
+            arrays["positions"],
+            arrays["normals"],
+            object_pose,
+            spec_json,
+            settings_json,
+            int(threads),
+            bool(warm_start),
+            torque.reshape((B, K, m)),
+            objective.reshape((B, K)),
+            wrench_residual.reshape((B, K)),
+            status.reshape((B, K)),
+        )
+        errs = {(g, k) if not single else g: msg for g, k, msg in errors}
+        return HandBatchResult(torque, objective, wrench_residual, status, errs, list(names))
 
 
 def synthetic_grasps(

@@ -2,6 +2,7 @@
 //! `grasp-torque` facade; the conveniences (dicts, keyword defaults, named tuples) live
 //! in `grasp_torque/__init__.py`.
 
+use grasp_torque::hand::{GraspPose, HandContact, HandGrasps, ObjectPose};
 use grasp_torque::{
     file::ContactSpec, file::MatrixFile, for_each_solution, Backend, BatchOptions, BatchSource,
     Error, GraspProblem, GraspSolver, Matrix, Overrides, ProblemError, ProblemParser, SfceSpacing,
@@ -9,7 +10,8 @@ use grasp_torque::{
 };
 use numpy::ndarray::{ArrayView2, ArrayView3, Axis};
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray3, PyReadwriteArrayDyn, PyUntypedArrayMethods,
+    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArrayDyn,
+    PyUntypedArrayMethods,
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -17,7 +19,7 @@ use pyo3::types::PyDict;
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
 use std::path::Path;
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 
 fn invalid(message: impl ToString) -> PyErr {
     PyValueError::new_err(message.to_string())
@@ -759,9 +761,21 @@ fn solve_batch(
         threads: Some(threads),
         warm_start,
     };
+    run_batch(py, &source, &config, &options, &out)
+}
+
+/// Runs a batch with the GIL released, writing each answer into `out`; returns the
+/// rejected items' messages in item order.
+fn run_batch<S: BatchSource>(
+    py: Python<'_>,
+    source: &S,
+    config: &SolverConfig,
+    options: &BatchOptions,
+    out: &Outputs,
+) -> PyResult<Vec<(usize, usize, String)>> {
     let errors = Mutex::new(Vec::new());
     let result = py.detach(|| {
-        for_each_solution(&source, &config, &options, |gi, ki, r| {
+        for_each_solution(source, config, options, |gi, ki, r| {
             if let Err(e) = r {
                 errors
                     .lock()
@@ -775,6 +789,280 @@ fn solve_batch(
     let mut errors = errors.into_inner().unwrap_or_else(|p| p.into_inner());
     errors.sort_by_key(|e| (e.0, e.1));
     Ok(errors)
+}
+
+/// The options every grasp of a hand's batch shares.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HandSpec {
+    contacts: Vec<HandContact>,
+    torque_weights: Option<Vec<f64>>,
+    torque_limits: Option<serde_json::Value>,
+    min_normal_force: Option<serde_json::Value>,
+}
+
+/// A robot hand (URDF or MJCF), parsed once per process.
+#[pyclass(module = "grasp_torque._native", frozen)]
+struct Hand {
+    robot: Arc<grasp_torque::Robot>,
+    path: String,
+}
+
+impl Hand {
+    /// The hand file's grasps for `spec`, with the solver settings applied.
+    fn grasps(
+        &self,
+        spec: HandSpec,
+        settings: &Settings,
+    ) -> PyResult<(HandGrasps<'_>, SolverConfig)> {
+        let file = grasp_torque::HandFile {
+            name: None,
+            description: None,
+            hand: grasp_torque::hand::HandSpec {
+                model: self.path.clone(),
+                joint_positions: Default::default(),
+            },
+            object_pose: None,
+            contacts: spec.contacts,
+            wrench: vec![0.0; 6],
+            linearization: None,
+            torque_weights: spec.torque_weights,
+            torque_limits: spec.torque_limits,
+            min_normal_force: spec.min_normal_force,
+            initial_torque: None,
+            internal_forces: None,
+        };
+        let mut grasps = file.grasps(&self.robot).map_err(invalid)?;
+        let config = settings.configure(grasps.template_mut())?;
+        // What every grasp shares is checked once (weights or limits of the wrong
+        // length make the batch impossible, not B invalid items).
+        let mut shared = grasps.template().clone();
+        let n = shared.contacts.iter().map(|c| c.dim()).sum();
+        shared.grasp_matrix = Matrix::zeros(6, n);
+        shared.jacobian_transpose = Matrix::zeros(shared.joints(), n);
+        shared.validate().map_err(invalid)?;
+        Ok((grasps, config))
+    }
+}
+
+#[pymethods]
+impl Hand {
+    #[new]
+    fn new(path: &str) -> PyResult<Self> {
+        let robot = parser()
+            .robot(Path::new(path))
+            .map_err(|e| invalid(format!("{path}: {e}")))?;
+        Ok(Self {
+            robot,
+            path: path.to_string(),
+        })
+    }
+
+    /// `<robot name>` (or the MJCF model's name).
+    #[getter]
+    fn name(&self) -> &str {
+        &self.robot.name
+    }
+
+    /// The independent joints (neither fixed nor mimic), in file order: the columns of
+    /// `joint_positions`.
+    #[getter]
+    fn joint_names(&self) -> Vec<String> {
+        let r = &self.robot;
+        r.independent
+            .iter()
+            .map(|&j| r.joints[j].name.clone())
+            .collect()
+    }
+
+    /// The links (MJCF bodies), in file order.
+    #[getter]
+    fn links(&self) -> Vec<String> {
+        self.robot.links.clone()
+    }
+
+    /// The MJCF sites.
+    #[getter]
+    fn sites(&self) -> Vec<String> {
+        self.robot.sites.iter().map(|s| s.name.clone()).collect()
+    }
+
+    /// The warnings of reading the file.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.robot.warnings.clone()
+    }
+
+    /// What a batch with these contacts solves for: `(names, actuated)`, the names of
+    /// the problem's joints (or actuators, `actuated` true) in output order.
+    fn layout(&self, spec_json: &str, settings_json: &str) -> PyResult<(Vec<String>, bool)> {
+        let settings: Settings = from_keywords(settings_json)?;
+        let (grasps, _) = self.grasps(from_keywords(spec_json)?, &settings)?;
+        let t = grasps.template();
+        Ok(match &t.transmission {
+            Some(tr) => (tr.actuator_names.clone(), true),
+            None => (t.joint_names.clone(), false),
+        })
+    }
+
+    /// The batch (as `solve_batch`): grasp b is the hand at `q[b]` (`joint_positions`), its contacts at
+    /// `positions[b]` with `normals[b]` (a row of NaN: the contact's own), the object
+    /// at `poses[b]` (`[x, y, z, qw, qx, qy, qz]`).
+    #[allow(clippy::too_many_arguments)]
+    fn solve_batch(
+        &self,
+        py: Python<'_>,
+        q: PyReadonlyArray2<'_, f64>,
+        w: PyReadonlyArray3<'_, f64>,
+        positions: Option<PyReadonlyArray3<'_, f64>>,
+        normals: Option<PyReadonlyArray3<'_, f64>>,
+        poses: Option<PyReadonlyArray2<'_, f64>>,
+        spec_json: &str,
+        settings_json: &str,
+        threads: usize,
+        warm_start: bool,
+        mut torque: PyReadwriteArrayDyn<'_, f64>,
+        mut objective: PyReadwriteArrayDyn<'_, f64>,
+        mut wrench_residual: PyReadwriteArrayDyn<'_, f64>,
+        mut status: PyReadwriteArrayDyn<'_, i8>,
+    ) -> PyResult<Vec<(usize, usize, String)>> {
+        let settings: Settings = from_keywords(settings_json)?;
+        let (grasps, config) = self.grasps(from_keywords(spec_json)?, &settings)?;
+        let (qv, wv) = (q.as_array(), w.as_array());
+        let (b, nq) = qv.dim();
+        let (bw, k, sixw) = wv.dim();
+        let joints = self.robot.independent.len();
+        if nq != joints {
+            return Err(invalid(format!(
+                "joint_positions: expected shape (B, {joints}), one column per joint of Hand.joint_names, got {:?}",
+                qv.shape()
+            )));
+        }
+        if bw != b || sixw != 6 {
+            return Err(invalid(format!(
+                "W: expected shape ({b}, 6) or ({b}, K, 6), got {:?}",
+                wv.shape()
+            )));
+        }
+        if k == 0 {
+            return Err(invalid("W: expected at least one wrench per grasp (K ≥ 1)"));
+        }
+        let n = grasps.template().contacts.len();
+        let (pv, nv) = (
+            positions.as_ref().map(|a| a.as_array()),
+            normals.as_ref().map(|a| a.as_array()),
+        );
+        for (name, a) in [("positions", &pv), ("normals", &nv)] {
+            if let Some(a) = a {
+                if a.dim() != (b, n, 3) {
+                    return Err(invalid(format!(
+                        "{name}: expected shape ({b}, {n}, 3), one row per contact, got {:?}",
+                        a.shape()
+                    )));
+                }
+            }
+        }
+        let ov = poses.as_ref().map(|a| a.as_array());
+        if let Some(o) = &ov {
+            if o.dim() != (b, 7) {
+                return Err(invalid(format!(
+                    "object_pose: expected shape (7,) or ({b}, 7), [x, y, z, qw, qx, qy, qz], got {:?}",
+                    o.shape()
+                )));
+            }
+        }
+        if threads == 0 {
+            return Err(invalid("threads: expected at least 1 worker thread, got 0"));
+        }
+        let m = grasps.template().actuated();
+        let out = Outputs {
+            torque: contiguous_out("torque", &mut torque, &[b, k, m])?.as_mut_ptr(),
+            objective: contiguous_out("objective", &mut objective, &[b, k])?.as_mut_ptr(),
+            residual: contiguous_out("wrench_residual", &mut wrench_residual, &[b, k])?
+                .as_mut_ptr(),
+            status: contiguous_out("status", &mut status, &[b, k])?.as_mut_ptr(),
+            wrenches: k,
+            joints: m,
+        };
+        let source = Posed {
+            grasps,
+            q: qv,
+            w: wv,
+            positions: pv,
+            normals: nv,
+            poses: ov,
+        };
+        let options = BatchOptions {
+            threads: Some(threads),
+            warm_start,
+        };
+        run_batch(py, &source, &config, &options, &out)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Hand({:?}: {}, {} joints)",
+            self.path,
+            self.robot.name,
+            self.robot.independent.len()
+        )
+    }
+}
+
+/// A hand's batch: grasp b posed from row b of the caller's arrays.
+struct Posed<'a> {
+    grasps: HandGrasps<'a>,
+    q: ArrayView2<'a, f64>,
+    w: ArrayView3<'a, f64>,
+    positions: Option<ArrayView3<'a, f64>>,
+    normals: Option<ArrayView3<'a, f64>>,
+    poses: Option<ArrayView2<'a, f64>>,
+}
+
+/// Row `b` of a `[B, n, 3]` array as one optional point per contact: a row of NaN is
+/// `None` (the contact's own); any other row is given, and checked as the file's.
+fn rows3(a: &Option<ArrayView3<'_, f64>>, b: usize) -> Option<Vec<Option<[f64; 3]>>> {
+    a.as_ref().map(|a| {
+        a.index_axis(Axis(0), b)
+            .outer_iter()
+            .map(|r| {
+                let v = [r[0], r[1], r[2]];
+                (!v.iter().all(|x| x.is_nan())).then_some(v)
+            })
+            .collect()
+    })
+}
+
+impl BatchSource for Posed<'_> {
+    fn grasps(&self) -> usize {
+        self.q.nrows()
+    }
+    fn wrenches(&self, _: usize) -> usize {
+        self.w.shape()[1]
+    }
+    fn problem(&self, b: usize) -> Result<Cow<'_, GraspProblem>, Error> {
+        let q = self.q.row(b).to_vec();
+        let (positions, normals) = (rows3(&self.positions, b), rows3(&self.normals, b));
+        let object_pose = self.poses.as_ref().map(|o| ObjectPose {
+            position: [o[(b, 0)], o[(b, 1)], o[(b, 2)]],
+            quaternion: [o[(b, 3)], o[(b, 4)], o[(b, 5)], o[(b, 6)]],
+        });
+        let mut p = self
+            .grasps
+            .pose(&GraspPose {
+                joint_positions: &q,
+                positions: positions.as_deref(),
+                normals: normals.as_deref(),
+                object_pose,
+            })
+            .map_err(Error::from)?;
+        // Each wrench is checked when it is solved: a bad first wrench fails only itself.
+        p.wrench = [0.0; 6];
+        Ok(Cow::Owned(p))
+    }
+    fn wrench(&self, b: usize, k: usize) -> [f64; 6] {
+        std::array::from_fn(|i| self.w[(b, k, i)])
+    }
 }
 
 /// The number of cores rayon would use.
@@ -794,6 +1082,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Problem>()?;
     m.add_class::<Solver>()?;
     m.add_class::<SolveResult>()?;
+    m.add_class::<Hand>()?;
     m.add_function(wrap_pyfunction!(solve_batch, m)?)?;
     m.add_function(wrap_pyfunction!(default_threads, m)?)?;
     m.add_function(wrap_pyfunction!(backends, m)?)?;

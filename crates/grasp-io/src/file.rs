@@ -408,7 +408,8 @@ impl ProblemParser {
         parse_with(text, base, &|path| self.robot(path))
     }
 
-    fn robot(&self, path: &Path) -> Result<Arc<Robot>, ProblemError> {
+    /// The robot file at `path` (URDF or MJCF), parsed on first use.
+    pub fn robot(&self, path: &Path) -> Result<Arc<Robot>, ProblemError> {
         // Held while a new robot parses, so that threads asking for it parse it once.
         let mut robots = self.robots.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(r) = robots.get(path) {

@@ -218,8 +218,7 @@ impl HandFile {
         base.join(&self.hand.model)
     }
 
-    /// Builds the problem on an already parsed robot: what a planner that poses many
-    /// grasps of one hand calls.
+    /// Builds the problem on an already parsed robot.
     pub fn build(&self, robot: &Robot) -> Result<HandProblem, ProblemError> {
         let mut warnings = robot.warnings.clone();
         contact_count(self.contacts.len())?;
@@ -227,10 +226,10 @@ impl HandFile {
         let mut q_ind = vec![0.0; robot.independent.len()];
         let mut given = vec![false; robot.independent.len()];
         for (name, &value) in &self.hand.joint_positions {
-            let field = format!("hand.joint_positions.{name}");
+            let field = || format!("hand.joint_positions.{name}");
             let Some(j) = robot.joint(name) else {
                 return Err(ProblemError::invalid(
-                    field,
+                    field(),
                     format!(
                         "a joint of {} ({})",
                         robot.source,
@@ -248,14 +247,14 @@ impl HandFile {
             let joint = &robot.joints[j];
             if joint.kind == JointKind::Fixed {
                 return Err(ProblemError::invalid(
-                    field,
+                    field(),
                     "an independent joint (this one is fixed and has no position)",
                     value,
                 ));
             }
             if let Some(m) = joint.mimic {
                 return Err(ProblemError::invalid(
-                    field,
+                    field(),
                     format!(
                         "an independent joint: this one mimics `{}`, so set that joint's position",
                         robot.joints[m.leader].name
@@ -263,53 +262,48 @@ impl HandFile {
                     value,
                 ));
             }
-            if !value.is_finite() || value.abs() > MAX_MAGNITUDE {
-                return Err(ProblemError::invalid(
-                    field,
-                    format!("a finite position of magnitude at most {MAX_MAGNITUDE:e}"),
-                    value,
-                ));
-            }
             let k = robot.coupling[j]
                 .expect("a moving joint has a coupling")
                 .independent;
+            check_position(robot, k, value, field, &mut warnings)?;
             q_ind[k] = value;
             given[k] = true;
-            let (lo, hi) = (joint.lower, joint.upper);
-            if lo.is_some_and(|l| value < l) || hi.is_some_and(|h| value > h) {
-                warnings.push(format!(
-                    "hand.joint_positions.{name} = {value} is outside the joint's limits [{}, {}] (radians or metres)",
-                    lo.map_or("-inf".into(), |l| l.to_string()),
-                    hi.map_or("inf".into(), |h| h.to_string())
-                ));
-            }
         }
-        let pose = self.object_pose.unwrap_or_default();
-        check_vec(|| "object_pose.position".into(), pose.position, false)?;
-        let [w, x, y, z] = pose.quaternion;
-        let qn = (w * w + x * x + y * y + z * z).sqrt();
-        if !qn.is_finite() || (qn - 1.0).abs() > UNIT_TOLERANCE {
-            return Err(ProblemError::invalid(
-                "object_pose.quaternion",
-                format!("a unit quaternion [w, x, y, z] (length 1 ± {UNIT_TOLERANCE:e})"),
-                format!("{:?} (length {qn})", pose.quaternion),
-            ));
-        }
-        let object = Isometry3::from_parts(
-            Translation3::from(Vector3::from(pose.position)),
-            UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
-        );
-        let to_object = object.inverse();
-        let frames = robot.pose(&q_ind);
+        let grasps = self.grasps(robot)?;
+        let problem = grasps.pose(&GraspPose {
+            joint_positions: &q_ind,
+            ..GraspPose::default()
+        })?;
+        warnings.extend(grasps.warnings.iter().cloned());
+        let defaulted_joints = grasps
+            .rows
+            .iter()
+            .filter(|&&k| !given[k])
+            .map(|&k| robot.joints[robot.independent[k]].name.clone())
+            .collect();
+        Ok(HandProblem {
+            problem,
+            report: HandReport {
+                model: self.hand.model.clone(),
+                robot: robot.name.clone(),
+                defaulted_joints,
+                torque_limits: grasps.limits_from,
+                unlimited_joints: grasps.unlimited_joints.clone(),
+                actuator_limits: grasps.actuator_limits.clone(),
+                warnings,
+            },
+        })
+    }
 
-        // Contacts in the object frame, with the joints that move them.
-        struct Placed {
-            p: Vector3<f64>,
-            n: Vector3<f64>,
-            model: ContactModel,
-            chain: Vec<usize>,
-        }
-        let mut placed = Vec::with_capacity(self.contacts.len());
+    /// What the file fixes for every grasp of this hand on `robot`: the contacts'
+    /// links or sites and models, the problem's joints, actuators and limits, and the
+    /// options. [`HandGrasps::pose`] then builds the problem of one configuration,
+    /// contact placement and object pose (a planner's candidate grasp), without the
+    /// file's `joint_positions`.
+    pub fn grasps<'r>(&self, robot: &'r Robot) -> Result<HandGrasps<'r>, ProblemError> {
+        contact_count(self.contacts.len())?;
+        let mut warnings = Vec::new();
+        let mut contacts = Vec::with_capacity(self.contacts.len());
         let mut used = vec![false; robot.independent.len()];
         for (i, c) in self.contacts.iter().enumerate() {
             let at = || label(i, &c.name);
@@ -319,10 +313,7 @@ impl HandFile {
                 mu_torsion: c.mu_torsion,
             }
             .to_model_named(at)?;
-            if let Some(n) = c.normal {
-                check_vec(|| format!("{}.normal", at()), n, true)?;
-            }
-            let (link, p, n) = match (&c.link, &c.site) {
+            let (link, site) = match (&c.link, &c.site) {
                 (Some(name), None) => {
                     let link = robot.link(name).ok_or_else(|| {
                         ProblemError::invalid(
@@ -335,38 +326,13 @@ impl HandFile {
                             format!("`{name}`"),
                         )
                     })?;
-                    let position = c.position.ok_or_else(|| {
-                        ProblemError::invalid(
-                            format!("{}.position", at()),
-                            "the contact point [x, y, z] (required with link)",
-                            "missing",
-                        )
-                    })?;
-                    check_vec(|| format!("{}.position", at()), position, false)?;
-                    let normal = c.normal.ok_or_else(|| {
-                        ProblemError::invalid(
-                            format!("{}.normal", at()),
-                            "the unit normal [x, y, z] (required with link)",
-                            "missing",
-                        )
-                    })?;
-                    let (p, n) = match c.frame {
-                        ContactFrame::Object => (Vector3::from(position), Vector3::from(normal)),
-                        ContactFrame::Link => {
-                            let to = to_object * frames.links[link];
-                            (
-                                (to * Point3::from(position)).coords,
-                                to.rotation * Vector3::from(normal),
-                            )
-                        }
-                    };
-                    (link, p, n)
+                    (link, None)
                 }
                 (None, Some(name)) => {
                     let site = robot
                         .sites
                         .iter()
-                        .find(|s| &s.name == name)
+                        .position(|s| &s.name == name)
                         .ok_or_else(|| {
                             ProblemError::invalid(
                                 format!("{}.site", at()),
@@ -385,14 +351,7 @@ impl HandFile {
                             "a position",
                         ));
                     }
-                    let to = to_object * frames.links[site.link];
-                    let frame = to * site.frame;
-                    let n = match (c.normal, c.frame) {
-                        (None, _) => frame.rotation * Vector3::z(),
-                        (Some(n), ContactFrame::Object) => Vector3::from(n),
-                        (Some(n), ContactFrame::Link) => to.rotation * Vector3::from(n),
-                    };
-                    (site.link, frame.translation.vector, n)
+                    (robot.sites[site].link, Some(site))
                 }
                 _ => {
                     return Err(ProblemError::invalid(
@@ -406,13 +365,6 @@ impl HandFile {
                     ))
                 }
             };
-            if p.iter().any(|v| v.abs() > MAX_MAGNITUDE) {
-                return Err(ProblemError::invalid(
-                    format!("{}.position", at()),
-                    format!("a point within {MAX_MAGNITUDE:e} of the object origin"),
-                    format!("{:?} in the object frame", p.as_slice()),
-                ));
-            }
             let chain: Vec<usize> = robot
                 .chain(link)
                 .into_iter()
@@ -421,11 +373,11 @@ impl HandFile {
             for &j in &chain {
                 used[robot.coupling[j].expect("moving").independent] = true;
             }
-            // The frame convention normalises n exactly, as the geometry form does.
-            placed.push(Placed {
-                p,
-                n: n.normalize(),
+            contacts.push(Placing {
+                label: at(),
                 model,
+                link,
+                site,
                 chain,
             });
         }
@@ -483,57 +435,14 @@ impl HandFile {
         for (r, &k) in rows.iter().enumerate() {
             row_of[k] = r;
         }
-        // Joint axes and origins in the object frame.
-        let axes: Vec<(Vector3<f64>, Vector3<f64>)> = robot
-            .joints
-            .iter()
-            .zip(&frames.joints)
-            .map(|(j, f)| {
-                let t = to_object * f;
-                (t.rotation * j.axis.into_inner(), t.translation.vector)
-            })
-            .collect();
-        let mut g_cols: Vec<[f64; 6]> = Vec::new();
-        let mut jt_cols: Vec<Vec<f64>> = Vec::new();
-        let mut models = Vec::with_capacity(placed.len());
-        for c in &placed {
-            let [t1, t2, n] = contact_frame([c.n.x, c.n.y, c.n.z]);
-            let n = Vector3::from(n);
-            let dirs: Vec<Vector3<f64>> = match c.model {
-                ContactModel::Fpc => vec![n],
-                _ => vec![Vector3::from(t1), Vector3::from(t2), n],
-            };
-            let mut column = |d: Vector3<f64>, torsion: bool| {
-                let moment = if torsion { d } else { c.p.cross(&d) };
-                let force = if torsion { Vector3::zeros() } else { d };
-                g_cols.push([force.x, force.y, force.z, moment.x, moment.y, moment.z]);
-                let mut col = vec![0.0; rows.len()];
-                for &j in &c.chain {
-                    let (a, o) = &axes[j];
-                    let entry = match (robot.joints[j].kind.rotates(), torsion) {
-                        (true, false) => d.dot(&a.cross(&(c.p - o))),
-                        (true, true) => d.dot(a),
-                        (false, false) => d.dot(a),
-                        (false, true) => 0.0,
-                    };
-                    let cp = robot.coupling[j].expect("moving");
-                    col[row_of[cp.independent]] += cp.multiplier * entry;
-                }
-                jt_cols.push(col);
-            };
-            for &d in &dirs {
-                column(d, false);
-            }
-            if c.model.dim() == 4 {
-                column(n, true);
-            }
-            models.push(c.model);
-        }
-        let nf = g_cols.len();
-        let g = Matrix::from_fn(6, nf, |r, c| flush_subnormal(g_cols[c][r]));
-        let jt = Matrix::from_fn(rows.len(), nf, |r, c| flush_subnormal(jt_cols[c][r]));
         let wrench = crate::file::wrench6(&self.wrench)?;
-        let mut p = GraspProblem::new(g, jt, wrench, models);
+        let models = contacts.iter().map(|c| c.model).collect();
+        let mut p = GraspProblem::new(
+            Matrix::zeros(6, 0),
+            Matrix::zeros(rows.len(), 0),
+            wrench,
+            models,
+        );
         let name_of = |k: usize| robot.joints[robot.independent[k]].name.clone();
         p.joint_names = rows.iter().map(|&k| name_of(k)).collect();
 
@@ -640,33 +549,324 @@ impl HandFile {
             internal_forces: self.internal_forces,
         }
         .apply(&mut p)?;
-        p.validate()?;
-        let defaulted_joints = rows
+        let actuator_limits = columns
             .iter()
-            .filter(|&&k| !given[k])
-            .map(|&k| name_of(k))
+            .map(|&a| {
+                let act = &robot.actuators[a];
+                ActuatorLimit {
+                    actuator: act.name.clone(),
+                    limit: act.limit,
+                    source: act.limit_source,
+                }
+            })
             .collect();
-        Ok(HandProblem {
-            problem: p,
-            report: HandReport {
-                model: self.hand.model.clone(),
-                robot: robot.name.clone(),
-                defaulted_joints,
-                torque_limits: limits_from,
-                unlimited_joints,
-                actuator_limits: columns
-                    .iter()
-                    .map(|&a| {
-                        let act = &robot.actuators[a];
-                        ActuatorLimit {
-                            actuator: act.name.clone(),
-                            limit: act.limit,
-                            source: act.limit_source,
-                        }
-                    })
-                    .collect(),
-                warnings,
-            },
+        Ok(HandGrasps {
+            robot,
+            contacts,
+            positions: self.contacts.iter().map(|c| c.position).collect(),
+            normals: self.contacts.iter().map(|c| c.normal).collect(),
+            frames: self.contacts.iter().map(|c| c.frame).collect(),
+            object_pose: self.object_pose.unwrap_or_default(),
+            rows,
+            row_of,
+            template: p,
+            limits_from,
+            unlimited_joints,
+            actuator_limits,
+            warnings,
         })
+    }
+}
+
+/// Checks one independent joint's position `value` (index `k` of
+/// [`Robot::independent`]); a position outside the joint's limits is a warning.
+fn check_position(
+    robot: &Robot,
+    k: usize,
+    value: f64,
+    field: impl Fn() -> String,
+    warnings: &mut Vec<String>,
+) -> Result<(), ProblemError> {
+    if !value.is_finite() || value.abs() > MAX_MAGNITUDE {
+        return Err(ProblemError::invalid(
+            field(),
+            format!("a finite position of magnitude at most {MAX_MAGNITUDE:e}"),
+            value,
+        ));
+    }
+    let joint = &robot.joints[robot.independent[k]];
+    let (lo, hi) = (joint.lower, joint.upper);
+    if lo.is_some_and(|l| value < l) || hi.is_some_and(|h| value > h) {
+        warnings.push(format!(
+            "{} = {value} is outside the joint's limits [{}, {}] (radians or metres)",
+            field(),
+            lo.map_or("-inf".into(), |l| l.to_string()),
+            hi.map_or("inf".into(), |h| h.to_string())
+        ));
+    }
+    Ok(())
+}
+
+/// A contact as the file fixes it for every grasp.
+#[derive(Clone, Debug)]
+struct Placing {
+    /// `contacts[i]` or `contacts[i] (name)`, for messages.
+    label: String,
+    model: ContactModel,
+    /// The link it is on (a site's link for a site).
+    link: usize,
+    site: Option<usize>,
+    /// The moving joints from the root to `link`.
+    chain: Vec<usize>,
+}
+
+/// One grasp of a hand: what [`HandGrasps::pose`] takes in place of the file's
+/// `joint_positions`, contact points and normals, and object pose. `None` (or an empty
+/// slice of joint positions) keeps what the file gives.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GraspPose<'a> {
+    /// Every independent joint's position, in [`Robot::independent`] order (radians or
+    /// metres); empty: all at 0.
+    pub joint_positions: &'a [f64],
+    /// Per contact, its point in its `frame`; `None` per contact (or for all): the
+    /// file's.
+    pub positions: Option<&'a [Option<[f64; 3]>]>,
+    /// Per contact, its unit normal in its `frame`; `None`: the file's (a site's z axis
+    /// when the file has none).
+    pub normals: Option<&'a [Option<[f64; 3]>]>,
+    /// The object frame in the root link's frame; `None`: the file's.
+    pub object_pose: Option<ObjectPose>,
+}
+
+/// The grasps of one hand file's contacts on a robot, ready to pose: what a planner
+/// that tries many configurations and contact points of one hand calls
+/// ([`HandFile::grasps`]). Every posed problem has the same joints (the independent
+/// joints the contacts' links and the actuators bring in), columns and options.
+#[derive(Clone, Debug)]
+pub struct HandGrasps<'r> {
+    robot: &'r Robot,
+    contacts: Vec<Placing>,
+    positions: Vec<Option<[f64; 3]>>,
+    normals: Vec<Option<[f64; 3]>>,
+    frames: Vec<ContactFrame>,
+    object_pose: ObjectPose,
+    /// The problem's joints, as indices of [`Robot::independent`].
+    rows: Vec<usize>,
+    /// Per independent joint, its row in the problem (`usize::MAX` if none).
+    row_of: Vec<usize>,
+    /// The problem without G and Jᵀ: models, joint names, transmission, options.
+    template: GraspProblem,
+    limits_from: &'static str,
+    unlimited_joints: Vec<String>,
+    actuator_limits: Vec<ActuatorLimit>,
+    /// What the limits' source left unlimited.
+    warnings: Vec<String>,
+}
+
+impl HandGrasps<'_> {
+    /// The problem without its G and Jᵀ (zero columns): its joints, actuators,
+    /// contact models and options, the same for every pose.
+    pub fn template(&self) -> &GraspProblem {
+        &self.template
+    }
+
+    /// The template, for options that every pose shares (a linearisation, weights);
+    /// its G and Jᵀ are replaced by each pose's, and a pose whose problem no longer
+    /// fits its contacts fails validation.
+    pub fn template_mut(&mut self) -> &mut GraspProblem {
+        &mut self.template
+    }
+
+    /// The robot.
+    pub fn robot(&self) -> &Robot {
+        self.robot
+    }
+
+    /// Builds the problem of one grasp. Its joint positions are checked (finite, of
+    /// magnitude at most `MAX_MAGNITUDE`; a position outside the joint's limits is not
+    /// an error), its points and normals as the file's.
+    pub fn pose(&self, pose: &GraspPose<'_>) -> Result<GraspProblem, ProblemError> {
+        let robot = self.robot;
+        let nq = robot.independent.len();
+        let zeros;
+        let q_ind = if pose.joint_positions.is_empty() {
+            zeros = vec![0.0; nq];
+            &zeros[..]
+        } else {
+            pose.joint_positions
+        };
+        if q_ind.len() != nq {
+            return Err(ProblemError::invalid(
+                "joint_positions",
+                format!(
+                    "{nq} positions, one per independent joint of {}",
+                    robot.source
+                ),
+                format!("{} positions", q_ind.len()),
+            ));
+        }
+        let mut ignored = Vec::new();
+        for (k, &v) in q_ind.iter().enumerate() {
+            let field = || {
+                format!(
+                    "joint_positions[{k}] ({})",
+                    robot.joints[robot.independent[k]].name
+                )
+            };
+            check_position(robot, k, v, field, &mut ignored)?;
+        }
+        let n = self.contacts.len();
+        for (field, given) in [("positions", pose.positions), ("normals", pose.normals)] {
+            if let Some(g) = given.filter(|g| g.len() != n) {
+                return Err(ProblemError::invalid(
+                    field,
+                    format!("{n} entries, one per contact"),
+                    format!("{} entries", g.len()),
+                ));
+            }
+        }
+        let object_pose = pose.object_pose.unwrap_or(self.object_pose);
+        check_vec(
+            || "object_pose.position".into(),
+            object_pose.position,
+            false,
+        )?;
+        let [w, x, y, z] = object_pose.quaternion;
+        let qn = (w * w + x * x + y * y + z * z).sqrt();
+        if !qn.is_finite() || (qn - 1.0).abs() > UNIT_TOLERANCE {
+            return Err(ProblemError::invalid(
+                "object_pose.quaternion",
+                format!("a unit quaternion [w, x, y, z] (length 1 ± {UNIT_TOLERANCE:e})"),
+                format!("{:?} (length {qn})", object_pose.quaternion),
+            ));
+        }
+        let object = Isometry3::from_parts(
+            Translation3::from(Vector3::from(object_pose.position)),
+            UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
+        );
+        let to_object = object.inverse();
+        let frames = robot.pose(q_ind);
+
+        // Contacts in the object frame.
+        let mut placed = Vec::with_capacity(n);
+        for (i, c) in self.contacts.iter().enumerate() {
+            let at = || c.label.clone();
+            let position = pose.positions.and_then(|p| p[i]).or(self.positions[i]);
+            let normal = pose.normals.and_then(|p| p[i]).or(self.normals[i]);
+            if let Some(n) = normal {
+                check_vec(|| format!("{}.normal", at()), n, true)?;
+            }
+            let to = to_object * frames.links[c.link];
+            let (p, n) = match c.site {
+                None => {
+                    let position = position.ok_or_else(|| {
+                        ProblemError::invalid(
+                            format!("{}.position", at()),
+                            "the contact point [x, y, z] (required with link)",
+                            "missing",
+                        )
+                    })?;
+                    check_vec(|| format!("{}.position", at()), position, false)?;
+                    let normal = normal.ok_or_else(|| {
+                        ProblemError::invalid(
+                            format!("{}.normal", at()),
+                            "the unit normal [x, y, z] (required with link)",
+                            "missing",
+                        )
+                    })?;
+                    match self.frames[i] {
+                        ContactFrame::Object => (Vector3::from(position), Vector3::from(normal)),
+                        ContactFrame::Link => (
+                            (to * Point3::from(position)).coords,
+                            to.rotation * Vector3::from(normal),
+                        ),
+                    }
+                }
+                Some(s) => {
+                    if position.is_some() {
+                        return Err(ProblemError::invalid(
+                            format!("{}.position", at()),
+                            "no position with site (the contact point is the site's origin)",
+                            "a position",
+                        ));
+                    }
+                    let frame = to * robot.sites[s].frame;
+                    let n = match (normal, self.frames[i]) {
+                        (None, _) => frame.rotation * Vector3::z(),
+                        (Some(n), ContactFrame::Object) => Vector3::from(n),
+                        (Some(n), ContactFrame::Link) => to.rotation * Vector3::from(n),
+                    };
+                    (frame.translation.vector, n)
+                }
+            };
+            if p.iter().any(|v| v.abs() > MAX_MAGNITUDE) {
+                return Err(ProblemError::invalid(
+                    format!("{}.position", at()),
+                    format!("a point within {MAX_MAGNITUDE:e} of the object origin"),
+                    format!("{:?} in the object frame", p.as_slice()),
+                ));
+            }
+            // The frame convention normalises n exactly, as the geometry form does.
+            placed.push((p, n.normalize()));
+        }
+        // Joint axes and origins in the object frame.
+        let axes: Vec<(Vector3<f64>, Vector3<f64>)> = robot
+            .joints
+            .iter()
+            .zip(&frames.joints)
+            .map(|(j, f)| {
+                let t = to_object * f;
+                (t.rotation * j.axis.into_inner(), t.translation.vector)
+            })
+            .collect();
+        let m = self.rows.len();
+        let nf = self.contacts.iter().map(|c| c.model.dim()).sum();
+        let mut g = Matrix::zeros(6, nf);
+        let mut jt = Matrix::zeros(m, nf);
+        let mut col = 0;
+        for (c, &(p, n)) in self.contacts.iter().zip(&placed) {
+            let [t1, t2, n] = contact_frame([n.x, n.y, n.z]);
+            let n = Vector3::from(n);
+            let dirs: &[Vector3<f64>] = match c.model {
+                ContactModel::Fpc => &[n],
+                _ => &[Vector3::from(t1), Vector3::from(t2), n],
+            };
+            let mut column = |d: Vector3<f64>, torsion: bool| {
+                let moment = if torsion { d } else { p.cross(&d) };
+                let force = if torsion { Vector3::zeros() } else { d };
+                for (r, v) in [force.x, force.y, force.z, moment.x, moment.y, moment.z]
+                    .into_iter()
+                    .enumerate()
+                {
+                    g[(r, col)] = flush_subnormal(v);
+                }
+                for &j in &c.chain {
+                    let (a, o) = &axes[j];
+                    let entry = match (robot.joints[j].kind.rotates(), torsion) {
+                        (true, false) => d.dot(&a.cross(&(p - o))),
+                        (true, true) => d.dot(a),
+                        (false, false) => d.dot(a),
+                        (false, true) => 0.0,
+                    };
+                    let cp = robot.coupling[j].expect("moving");
+                    jt[(self.row_of[cp.independent], col)] += cp.multiplier * entry;
+                }
+                col += 1;
+            };
+            for &d in dirs {
+                column(d, false);
+            }
+            if c.model.dim() == 4 {
+                column(n, true);
+            }
+        }
+        for v in jt.as_mut_slice() {
+            *v = flush_subnormal(*v);
+        }
+        let mut problem = self.template.clone();
+        problem.grasp_matrix = g;
+        problem.jacobian_transpose = jt;
+        problem.validate()?;
+        Ok(problem)
     }
 }

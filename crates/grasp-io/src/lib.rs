@@ -18,5 +18,5 @@ pub use file::{
 pub use geometry::GeometryFile;
 pub use grasp_core::error::ProblemError;
 pub use grasp_core::GraspProblem;
-pub use hand::{HandFile, HandProblem, HandReport};
+pub use hand::{GraspPose, HandFile, HandGrasps, HandProblem, HandReport};
 pub use urdf::Robot;

@@ -6,6 +6,7 @@
 //! Run: `cargo bench -p grasp-torque --bench hand`. Figures are in docs/benchmarks.md.
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use grasp_torque::hand::GraspPose;
 use grasp_torque::{GraspSolver, HandFile, Robot, SolverConfig, WarmStart};
 use std::hint::black_box;
 use std::path::Path;
@@ -30,6 +31,24 @@ fn hand(c: &mut Criterion) {
         let robot = Robot::load(&urdf).unwrap();
         g.bench_function("build G and Jᵀ", |b| {
             b.iter(|| spec.build(black_box(&robot)).unwrap())
+        });
+        // A planner's candidate: the contacts resolved once, each grasp posed from its
+        // joint positions (the file's, here).
+        let grasps = spec.grasps(&robot).unwrap();
+        let mut q = vec![0.0; robot.independent.len()];
+        for (name, &v) in &spec.hand.joint_positions {
+            let j = robot.joint(name).unwrap();
+            q[robot.coupling[j].unwrap().independent] = v;
+        }
+        g.bench_function("pose a resolved grasp", |b| {
+            b.iter(|| {
+                grasps
+                    .pose(&GraspPose {
+                        joint_positions: black_box(&q),
+                        ..GraspPose::default()
+                    })
+                    .unwrap()
+            })
         });
         let problem = spec.build(&robot).unwrap().problem;
         let config = SolverConfig::default();

@@ -1,0 +1,167 @@
+"""Hand.solve_batch: a planner's batch straight from a URDF or MJCF hand, against the
+same grasps written as hand-form dicts and solved one by one."""
+
+import copy
+import json
+import pickle
+
+import numpy as np
+import pytest
+
+import grasp_torque as gt
+from conftest import ROOT
+
+HANDS = ROOT / "fixtures" / "hands"
+
+
+def fixture(name):
+    d = json.loads((HANDS / f"{name}.json").read_text())
+    hand = gt.Hand(HANDS / d["hand"]["model"])
+    q = np.zeros(len(hand.joint_names))
+    for k, v in d["hand"]["joint_positions"].items():
+        q[hand.joint_names.index(k)] = v
+    return d, hand, q
+
+
+def pose_of(d):
+    p = d.get("object_pose", {})
+    return np.array(p.get("position", [0.0] * 3) + p.get("quaternion", [1.0, 0, 0, 0]))
+
+
+def as_dict(d, hand, q, positions=None, normals=None, pose=None):
+    """Grasp b written as a hand-form problem, as a user without the batch would."""
+    e = copy.deepcopy(d)
+    e["hand"]["model"] = str(HANDS / d["hand"]["model"])
+    e["hand"]["joint_positions"] = dict(zip(hand.joint_names, map(float, q)))
+    for i, c in enumerate(e["contacts"]):
+        if positions is not None and not np.isnan(positions[i]).all():
+            c["position"] = positions[i].tolist()
+        if normals is not None and not np.isnan(normals[i]).all():
+            c["normal"] = normals[i].tolist()
+    if pose is not None:
+        e["object_pose"] = {"position": pose[:3].tolist(), "quaternion": pose[3:].tolist()}
+    return e
+
+
+def test_a_urdf_hands_batch_matches_its_grasps_one_by_one():
+    d, hand, q0 = fixture("allegro-pinch")
+    rng = np.random.default_rng(7)
+    B, K = 60, 3
+    k = len(d["contacts"])
+    q = q0 + rng.normal(0, 0.03, (B, len(q0)))
+    P = np.array([c["position"] for c in d["contacts"]]) + rng.normal(0, 0.002, (B, k, 3))
+    N = np.array([c["normal"] for c in d["contacts"]]) + rng.normal(0, 0.05, (B, k, 3))
+    N /= np.linalg.norm(N, axis=2, keepdims=True)
+    N[::4, 1] = np.nan  # a row of NaN: the contact dict's own normal
+    W = np.array(d["wrench"]) * (1 + 0.01 * np.arange(K))[None, :, None] * np.ones((B, 1, 1))
+    pose = pose_of(d)
+    contacts = d["contacts"]
+    out = hand.solve_batch(q, W, contacts, positions=P, normals=N, object_pose=pose, threads=2)
+    assert out.torque.shape == (B, K, 12) and out.errors == {}
+    assert out.names == [n for n in hand.joint_names if n not in ("joint_8.0", "joint_9.0", "joint_10.0", "joint_11.0")]
+    solved = 0
+    for b in range(B):
+        p = gt.Problem.from_dict(as_dict(d, hand, q[b], P[b], N[b], pose))
+        assert p.joint_names == out.names
+        s = gt.Solver(p)
+        for kk in range(K):
+            r = s.solve(W[b, kk])
+            assert gt.STATUS_CODES[int(out.status[b, kk])] == r.status
+            if r.objective is not None:
+                solved += 1
+                assert out.objective[b, kk] == r.objective
+                np.testing.assert_array_equal(out.torque[b, kk], r.torque)
+    assert solved >= B * K // 2
+
+
+def test_an_mjcf_hands_batch_gives_actuator_forces_within_the_models_limits():
+    d, hand, q0 = fixture("shadow-tripod")
+    rng = np.random.default_rng(11)
+    B = 40
+    q = q0 + rng.normal(0, 0.02, (B, len(q0)))
+    W = np.tile(d["wrench"], (B, 1))
+    pose = pose_of(d)
+    out = hand.solve_batch(q, W, d["contacts"], object_pose=pose, torque_limits="model")
+    assert out.errors == {}
+    optimal = 0
+    for b in range(B):
+        r = gt.Solver(gt.Problem.from_dict(as_dict(d, hand, q[b], pose=pose))).solve()
+        assert r.actuator_names == out.names
+        assert gt.STATUS_CODES[int(out.status[b])] == r.status
+        if r.objective is not None:
+            optimal += 1
+            assert out.objective[b] == r.objective
+            np.testing.assert_array_equal(out.torque[b], r.torque)
+    assert optimal >= B // 2
+
+
+def test_rejected_grasps_are_invalid_items_naming_the_field():
+    d, hand, q0 = fixture("allegro-pinch")
+    B = 6
+    q = np.tile(q0, (B, 1))
+    q[1, 3] = np.nan
+    N = np.tile([c["normal"] for c in d["contacts"]], (B, 1, 1))
+    N[2, 0] *= 2.0
+    P = np.tile([c["position"] for c in d["contacts"]], (B, 1, 1))
+    P[3, 2, 1] = np.nan  # part of a row: not "the contact's own"
+    W = np.tile(d["wrench"], (B, 1))
+    W[4, 0] = np.inf
+    out = hand.solve_batch(q, W, d["contacts"], positions=P, normals=N, object_pose=pose_of(d))
+    assert list(out.status) == [0, 5, 5, 5, 5, 0]
+    assert out.errors[1].startswith("joint_positions[3] (joint_3.0): ") and "NaN" in out.errors[1]
+    assert out.errors[2].startswith("contacts[0] (index).normal: ")
+    assert out.errors[3].startswith("contacts[2] (thumb).position: ")
+    assert "wrench" in out.errors[4]
+    assert np.isnan(out.torque[1:5]).all() and np.isnan(out.objective[1:5]).all()
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(joint_positions=np.zeros((2, 3))), "joint_positions: expected shape (B, 16)"),
+        (dict(joint_positions=np.zeros(16)), "joint_positions: expected shape (B, 16)"),
+        (dict(positions=np.zeros((2, 2, 3))), "positions: expected shape (2, 3, 3)"),
+        (dict(normals=np.zeros((2, 3))), "normals: expected shape (B, k, 3)"),
+        (dict(object_pose=np.zeros(6)), "object_pose: expected shape (7,) or (2, 7)"),
+        (dict(W=np.zeros((3, 6))), "W: expected shape (2, 6) or (2, K, 6)"),
+        (dict(contacts=[{"link": "link_3.0_tipp", "model": "pcwf", "mu": 0.5}]), "link_3.0_tip"),
+        (dict(contacts={"link": "link_3.0_tip"}), "contacts: expected a list"),
+        (dict(torque_weights=[1.0] * 3), "torque_weights"),
+        (dict(sides=2), "sides"),
+        (dict(threads=0), "threads: expected at least 1"),
+    ],
+)
+def test_arguments_that_make_the_batch_impossible_raise(kwargs, message):
+    d, hand, q0 = fixture("allegro-pinch")
+    args = dict(joint_positions=np.tile(q0, (2, 1)), W=np.tile(d["wrench"], (2, 1)), contacts=d["contacts"])
+    for k in ("joint_positions", "W", "contacts"):
+        if k in kwargs:
+            args[k] = kwargs.pop(k)
+    with pytest.raises(ValueError, match=None) as e:
+        hand.solve_batch(args["joint_positions"], args["W"], args["contacts"], **kwargs)
+    assert message in str(e.value)
+
+
+def test_a_hand_reports_its_file_and_pickles():
+    _, hand, _ = fixture("shadow-tripod")
+    assert "robot0:S_thtip" in hand.sites and "robot0:FFJ3" in hand.joint_names
+    again = pickle.loads(pickle.dumps(hand))
+    assert again.joint_names == hand.joint_names and again.name == hand.name
+    with pytest.raises(ValueError, match="no_such_hand.urdf"):
+        gt.Hand(HANDS / "no_such_hand.urdf")
+
+
+def test_the_planner_example_runs(root):
+    import subprocess
+    import sys
+
+    script = root / "examples" / "python" / "hand_batch.py"
+    out = subprocess.run(
+        [sys.executable, str(script), "--grasps", "500", "--check"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "500 of 500 candidates hold the object" in out.stdout
+    assert "matches the batch" in out.stdout
