@@ -48,6 +48,7 @@ __all__ = [
     "Solver",
     "Hand",
     "HandBatchResult",
+    "HandArrays",
     "Result",
     "solve_batch",
     "BatchResult",
@@ -493,6 +494,14 @@ HandBatchResult.__doc__ = """``BatchResult`` with ``names``: the joints (or, for
 actuators, the actuators) of ``torque``'s last axis, in order."""
 
 
+HandArrays = namedtuple(
+    "HandArrays", ["G", "JT", "transmission", "joint_names", "actuator_names", "errors"]
+)
+HandArrays.__doc__ = """What ``Hand.arrays`` builds: ``G[B,6,n]`` and ``JT[B,m,n]`` per grasp
+(NaN for a rejected one), the transmission ``T[m,a]`` of an MJCF hand with actuators
+(else None), the names of JT's rows and T's columns, and ``errors``: ``{b: message}``."""
+
+
 class Hand:
     """A robot hand from a URDF or MJCF file, parsed once per process: where a grasp
     planner that tries many configurations and contact points of one hand starts.
@@ -541,6 +550,48 @@ class Hand:
     def __repr__(self) -> str:
         return repr(self._native)
 
+    def _poses(self, joint_positions, positions, normals, object_pose):
+        """The per-grasp arrays, checked and made C-contiguous float64."""
+        q = _real("joint_positions", joint_positions)
+        if q.ndim != 2:
+            raise ValueError(
+                f"joint_positions: expected shape (B, {len(self.joint_names)}), got {q.shape}"
+            )
+        B = q.shape[0]
+        arrays = {}
+        for name, a in (("positions", positions), ("normals", normals)):
+            if a is not None:
+                a = _real(name, a)
+                if a.ndim != 3:
+                    raise ValueError(f"{name}: expected shape (B, k, 3), got {a.shape}")
+            arrays[name] = a
+        if object_pose is not None:
+            object_pose = _real("object_pose", object_pose)
+            if object_pose.shape == (7,):
+                object_pose = np.ascontiguousarray(np.broadcast_to(object_pose, (B, 7)))
+            elif object_pose.ndim != 2:
+                raise ValueError(
+                    f"object_pose: expected shape (7,) or ({B}, 7), [x, y, z, qw, qx, qy, qz], got {object_pose.shape}"
+                )
+        return q, arrays["positions"], arrays["normals"], object_pose
+
+    def arrays(
+        self, joint_positions, contacts: Sequence[Mapping], *, positions=None, normals=None, object_pose=None
+    ) -> HandArrays:
+        """Each grasp's G and Jᵀ (as ``solve_batch`` poses them, same arguments), for
+        ``gt.solve_batch``, another solver or a grasp-quality measure. G's columns are
+        the contacts' force components in their frames (``docs/geometry.md``), in the
+        object frame about its origin; JT's rows are ``joint_names``."""
+        q, P, N, pose = self._poses(joint_positions, positions, normals, object_pose)
+        spec_json = _dumps({"contacts": _contacts(contacts)})
+        d = json.loads(self._native.describe(spec_json))
+        B, n, m = q.shape[0], d["force_dim"], len(d["joint_names"])
+        G = np.empty((B, 6, n))
+        JT = np.empty((B, m, n))
+        errors = self._native.arrays(q, P, N, pose, spec_json, G, JT)
+        T = None if d["transmission"] is None else np.array(d["transmission"], dtype=np.float64)
+        return HandArrays(G, JT, T, d["joint_names"], d["actuator_names"], dict(errors))
+
     def solve_batch(
         self,
         joint_positions,
@@ -586,12 +637,8 @@ class Hand:
         unit) is an ``invalid`` item with its message in ``errors``; only arguments that
         make the whole batch impossible raise ``ValueError``.
         """
-        q = _real("joint_positions", joint_positions)
+        q, P, N, object_pose = self._poses(joint_positions, positions, normals, object_pose)
         W = _real("W", W)
-        if q.ndim != 2:
-            raise ValueError(
-                f"joint_positions: expected shape (B, {len(self.joint_names)}), got {q.shape}"
-            )
         single = W.ndim == 2
         if single:
             W3 = W.reshape(W.shape[0], 1, W.shape[1])
@@ -600,21 +647,6 @@ class Hand:
         else:
             raise ValueError(f"W: expected shape (B, 6) or (B, K, 6), got {W.shape}")
         B, K = q.shape[0], W3.shape[1]
-        arrays = {}
-        for name, a in (("positions", positions), ("normals", normals)):
-            if a is not None:
-                a = _real(name, a)
-                if a.ndim != 3:
-                    raise ValueError(f"{name}: expected shape (B, k, 3), got {a.shape}")
-            arrays[name] = a
-        if object_pose is not None:
-            object_pose = _real("object_pose", object_pose)
-            if object_pose.shape == (7,):
-                object_pose = np.ascontiguousarray(np.broadcast_to(object_pose, (B, 7)))
-            elif object_pose.ndim != 2:
-                raise ValueError(
-                    f"object_pose: expected shape (7,) or ({B}, 7), [x, y, z, qw, qx, qy, qz], got {object_pose.shape}"
-                )
         spec = {
             "contacts": _contacts(contacts),
             "torque_weights": torque_weights,
@@ -640,8 +672,8 @@ class Hand:
         errors = self._native.solve_batch(
             q,
             W3,
-            arrays["positions"],
-            arrays["normals"],
+            P,
+            N,
             object_pose,
             spec_json,
             settings_json,

@@ -905,9 +905,9 @@ impl Hand {
         })
     }
 
-    /// The batch (as `solve_batch`): grasp b is the hand at `q[b]` (`joint_positions`), its contacts at
-    /// `positions[b]` with `normals[b]` (a row of NaN: the contact's own), the object
-    /// at `poses[b]` (`[x, y, z, qw, qx, qy, qz]`).
+    /// The batch (as `solve_batch`): grasp b is the hand at `q[b]`
+    /// (`joint_positions`), its contacts at `positions[b]` with `normals[b]` (a row of
+    /// NaN: the contact's own), the object at `poses[b]` (`[x, y, z, qw, qx, qy, qz]`).
     #[allow(clippy::too_many_arguments)]
     fn solve_batch(
         &self,
@@ -928,16 +928,10 @@ impl Hand {
     ) -> PyResult<Vec<(usize, usize, String)>> {
         let settings: Settings = from_keywords(settings_json)?;
         let (grasps, config) = self.grasps(from_keywords(spec_json)?, &settings)?;
-        let (qv, wv) = (q.as_array(), w.as_array());
-        let (b, nq) = qv.dim();
+        let wv = w.as_array();
+        let source = Posed::new(grasps, &q, Some(wv), &positions, &normals, &poses)?;
+        let b = source.q.nrows();
         let (bw, k, sixw) = wv.dim();
-        let joints = self.robot.independent.len();
-        if nq != joints {
-            return Err(invalid(format!(
-                "joint_positions: expected shape (B, {joints}), one column per joint of Hand.joint_names, got {:?}",
-                qv.shape()
-            )));
-        }
         if bw != b || sixw != 6 {
             return Err(invalid(format!(
                 "W: expected shape ({b}, 6) or ({b}, K, 6), got {:?}",
@@ -947,34 +941,10 @@ impl Hand {
         if k == 0 {
             return Err(invalid("W: expected at least one wrench per grasp (K ≥ 1)"));
         }
-        let n = grasps.template().contacts.len();
-        let (pv, nv) = (
-            positions.as_ref().map(|a| a.as_array()),
-            normals.as_ref().map(|a| a.as_array()),
-        );
-        for (name, a) in [("positions", &pv), ("normals", &nv)] {
-            if let Some(a) = a {
-                if a.dim() != (b, n, 3) {
-                    return Err(invalid(format!(
-                        "{name}: expected shape ({b}, {n}, 3), one row per contact, got {:?}",
-                        a.shape()
-                    )));
-                }
-            }
-        }
-        let ov = poses.as_ref().map(|a| a.as_array());
-        if let Some(o) = &ov {
-            if o.dim() != (b, 7) {
-                return Err(invalid(format!(
-                    "object_pose: expected shape (7,) or ({b}, 7), [x, y, z, qw, qx, qy, qz], got {:?}",
-                    o.shape()
-                )));
-            }
-        }
         if threads == 0 {
             return Err(invalid("threads: expected at least 1 worker thread, got 0"));
         }
-        let m = grasps.template().actuated();
+        let m = source.grasps.template().actuated();
         let out = Outputs {
             torque: contiguous_out("torque", &mut torque, &[b, k, m])?.as_mut_ptr(),
             objective: contiguous_out("objective", &mut objective, &[b, k])?.as_mut_ptr(),
@@ -984,19 +954,75 @@ impl Hand {
             wrenches: k,
             joints: m,
         };
-        let source = Posed {
-            grasps,
-            q: qv,
-            w: wv,
-            positions: pv,
-            normals: nv,
-            poses: ov,
-        };
         let options = BatchOptions {
             threads: Some(threads),
             warm_start,
         };
         run_batch(py, &source, &config, &options, &out)
+    }
+
+    /// What every grasp of a batch with these contacts shares, as JSON: the joint and
+    /// actuator names, the transmission T (joints × actuators) or null, and n.
+    fn describe(&self, spec_json: &str) -> PyResult<String> {
+        let (grasps, _) = self.grasps(from_keywords(spec_json)?, &Settings::default())?;
+        let t = grasps.template();
+        let tr = t.transmission.as_ref();
+        let value = serde_json::json!({
+            "joint_names": t.joint_names,
+            "actuator_names": tr.map(|tr| tr.actuator_names.clone()),
+            "transmission": tr.map(|tr| {
+                (0..tr.matrix.nrows()).map(|i| tr.matrix.row(i).to_vec()).collect::<Vec<_>>()
+            }),
+            "force_dim": t.contacts.iter().map(|c| c.dim()).sum::<usize>(),
+        });
+        Ok(value.to_string())
+    }
+
+    /// Each grasp's G and Jᵀ, written into `g[b]` and `jt[b]` (NaN for a rejected
+    /// grasp, whose message is returned with its index).
+    #[allow(clippy::too_many_arguments)]
+    fn arrays(
+        &self,
+        py: Python<'_>,
+        q: PyReadonlyArray2<'_, f64>,
+        positions: Option<PyReadonlyArray3<'_, f64>>,
+        normals: Option<PyReadonlyArray3<'_, f64>>,
+        poses: Option<PyReadonlyArray2<'_, f64>>,
+        spec_json: &str,
+        mut g: PyReadwriteArrayDyn<'_, f64>,
+        mut jt: PyReadwriteArrayDyn<'_, f64>,
+    ) -> PyResult<Vec<(usize, String)>> {
+        let (grasps, _) = self.grasps(from_keywords(spec_json)?, &Settings::default())?;
+        let source = Posed::new(grasps, &q, None, &positions, &normals, &poses)?;
+        let b = source.q.nrows();
+        let n = source
+            .grasps
+            .template()
+            .contacts
+            .iter()
+            .map(|c| c.dim())
+            .sum();
+        let m = source.grasps.template().joints();
+        let g = contiguous_out("G", &mut g, &[b, 6, n])?;
+        let jt = contiguous_out("JT", &mut jt, &[b, m, n])?;
+        Ok(py.detach(|| {
+            let mut errors = Vec::new();
+            let blocks = g.chunks_exact_mut(6 * n).zip(jt.chunks_exact_mut(m * n));
+            for (i, (gb, jb)) in blocks.enumerate() {
+                match source.problem(i) {
+                    Ok(p) => {
+                        gb.copy_from_slice(p.grasp_matrix.as_slice());
+                        jb.copy_from_slice(p.jacobian_transpose.as_slice());
+                    }
+                    Err(e) => {
+                        gb.fill(f64::NAN);
+                        jb.fill(f64::NAN);
+                        errors.push((i, e.to_string()));
+                    }
+                }
+            }
+            errors
+        }))
     }
 
     fn __repr__(&self) -> String {
@@ -1013,10 +1039,65 @@ impl Hand {
 struct Posed<'a> {
     grasps: HandGrasps<'a>,
     q: ArrayView2<'a, f64>,
-    w: ArrayView3<'a, f64>,
+    /// `[B, K, 6]`; none when only G and Jᵀ are wanted.
+    w: Option<ArrayView3<'a, f64>>,
     positions: Option<ArrayView3<'a, f64>>,
     normals: Option<ArrayView3<'a, f64>>,
     poses: Option<ArrayView2<'a, f64>>,
+}
+
+impl<'a> Posed<'a> {
+    /// Checks the arrays' shapes against the hand and the contacts.
+    fn new(
+        grasps: HandGrasps<'a>,
+        q: &'a PyReadonlyArray2<'_, f64>,
+        w: Option<ArrayView3<'a, f64>>,
+        positions: &'a Option<PyReadonlyArray3<'_, f64>>,
+        normals: &'a Option<PyReadonlyArray3<'_, f64>>,
+        poses: &'a Option<PyReadonlyArray2<'_, f64>>,
+    ) -> PyResult<Self> {
+        let q = q.as_array();
+        let (b, nq) = q.dim();
+        let joints = grasps.robot().independent.len();
+        if nq != joints {
+            return Err(invalid(format!(
+                "joint_positions: expected shape (B, {joints}), one column per joint of Hand.joint_names, got {:?}",
+                q.shape()
+            )));
+        }
+        let n = grasps.template().contacts.len();
+        let (positions, normals) = (
+            positions.as_ref().map(|a| a.as_array()),
+            normals.as_ref().map(|a| a.as_array()),
+        );
+        for (name, a) in [("positions", &positions), ("normals", &normals)] {
+            if let Some(a) = a {
+                if a.dim() != (b, n, 3) {
+                    return Err(invalid(format!(
+                        "{name}: expected shape ({b}, {n}, 3), one row per contact, got {:?}",
+                        a.shape()
+                    )));
+                }
+            }
+        }
+        let poses = poses.as_ref().map(|a| a.as_array());
+        if let Some(o) = &poses {
+            if o.dim() != (b, 7) {
+                return Err(invalid(format!(
+                    "object_pose: expected shape (7,) or ({b}, 7), [x, y, z, qw, qx, qy, qz], got {:?}",
+                    o.shape()
+                )));
+            }
+        }
+        Ok(Self {
+            grasps,
+            q,
+            w,
+            positions,
+            normals,
+            poses,
+        })
+    }
 }
 
 /// Row `b` of a `[B, n, 3]` array as one optional point per contact: a row of NaN is
@@ -1038,7 +1119,7 @@ impl BatchSource for Posed<'_> {
         self.q.nrows()
     }
     fn wrenches(&self, _: usize) -> usize {
-        self.w.shape()[1]
+        self.w.as_ref().map_or(1, |w| w.shape()[1])
     }
     fn problem(&self, b: usize) -> Result<Cow<'_, GraspProblem>, Error> {
         let q = self.q.row(b).to_vec();
@@ -1061,7 +1142,9 @@ impl BatchSource for Posed<'_> {
         Ok(Cow::Owned(p))
     }
     fn wrench(&self, b: usize, k: usize) -> [f64; 6] {
-        std::array::from_fn(|i| self.w[(b, k, i)])
+        self.w
+            .as_ref()
+            .map_or([0.0; 6], |w| std::array::from_fn(|i| w[(b, k, i)]))
     }
 }
 

@@ -165,3 +165,38 @@ def test_the_planner_example_runs(root):
     assert out.returncode == 0, out.stdout + out.stderr
     assert "500 of 500 candidates hold the object" in out.stdout
     assert "matches the batch" in out.stdout
+
+
+@pytest.mark.parametrize("name", ["allegro-pinch", "shadow-tripod", "ability-tripod"])
+def test_arrays_are_the_hand_forms_matrices_and_solve_as_the_hand_batch(name):
+    d, hand, q0 = fixture(name)
+    rng = np.random.default_rng(3)
+    B = 25
+    q = q0 + rng.normal(0, 0.02, (B, len(q0)))
+    q[4, 0] = np.inf
+    pose = pose_of(d)
+    a = hand.arrays(q, d["contacts"], object_pose=pose)
+    assert set(a.errors) == {4} and "joint_positions[0]" in a.errors[4]
+    assert np.isnan(a.G[4]).all() and np.isnan(a.JT[4]).all()
+    for b in range(B):
+        if b == 4:
+            continue
+        p = gt.Problem.from_dict(as_dict(d, hand, q[b], pose=pose))
+        np.testing.assert_array_equal(a.G[b], p.grasp_matrix)
+        np.testing.assert_array_equal(a.JT[b], p.jacobian_transpose)
+        assert a.joint_names == p.joint_names
+    W = np.tile(d["wrench"], (B, 1))
+    limits = d.get("torque_limits")
+    ok = [b for b in range(B) if b != 4]
+    direct = hand.solve_batch(q[ok], W[ok], d["contacts"], object_pose=pose, torque_limits=limits)
+    models = [{k: c[k] for k in ("model", "mu", "mu_torsion") if k in c} for c in d["contacts"]]
+    kw = {}
+    if a.transmission is not None:
+        kw = dict(transmission=a.transmission, actuator_names=a.actuator_names)
+        assert direct.names == a.actuator_names
+    if limits == "model":
+        kw["torque_limits"] = gt.Problem.from_dict(as_dict(d, hand, q[0], pose=pose)).to_dict()["torque_limits"]
+    via = gt.solve_batch(a.G[ok], a.JT[ok], W[ok], models, **kw)
+    np.testing.assert_array_equal(via.status, direct.status)
+    np.testing.assert_array_equal(via.objective, direct.objective)
+    np.testing.assert_array_equal(via.torque, direct.torque)
