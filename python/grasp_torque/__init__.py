@@ -387,6 +387,47 @@ def _out(name: str, given, shape, dtype):
     return given
 
 
+def _wrenches(W: np.ndarray):
+    """``W`` as ``[B, K, 6]``, and whether it was ``[B, 6]``."""
+    if W.ndim == 2:
+        return W.reshape(W.shape[0], 1, W.shape[1]), True
+    if W.ndim == 3:
+        return W, False
+    raise ValueError(f"W: expected shape (B, 6) or (B, K, 6), got {W.shape}")
+
+
+def _outputs(lead, m, torque, objective, wrench_residual, status):
+    """A batch's four outputs, given (checked) or new."""
+    return (
+        _out("torque", torque, lead + (m,), np.float64),
+        _out("objective", objective, lead, np.float64),
+        _out("wrench_residual", wrench_residual, lead, np.float64),
+        _out("status", status, lead, np.int8),
+    )
+
+
+def _flat(outs, B, K, m):
+    """The outputs as the native batch writes them: ``[B, K, m]`` and ``[B, K]`` views."""
+    torque, objective, wrench_residual, status = outs
+    return (
+        torque.reshape((B, K, m)),
+        objective.reshape((B, K)),
+        wrench_residual.reshape((B, K)),
+        status.reshape((B, K)),
+    )
+
+
+def _threads(threads) -> int:
+    if threads is None:
+        return _native.default_threads()
+    return _count("threads", threads, 1, _native.MAX_THREADS)
+
+
+def _errors(errors, single: bool) -> dict:
+    """``{b: message}`` for one wrench per grasp, else ``{(b, k): message}``."""
+    return {g if single else (g, k): msg for g, k, msg in errors}
+
+
 def solve_batch(
     G,
     JT,
@@ -435,13 +476,7 @@ def solve_batch(
         raise ValueError(f"G: expected shape (B, 6, n), got {G.shape}")
     if JT.ndim != 3:
         raise ValueError(f"JT: expected shape (B, m, n), got {JT.shape}")
-    single = W.ndim == 2
-    if single:
-        W3 = W.reshape(W.shape[0], 1, W.shape[1])
-    elif W.ndim == 3:
-        W3 = W
-    else:
-        raise ValueError(f"W: expected shape (B, 6) or (B, K, 6), got {W.shape}")
+    W3, single = _wrenches(W)
     B, K, m = G.shape[0], W3.shape[1], JT.shape[1]
     if transmission is not None:
         transmission = _real("transmission", transmission)
@@ -450,11 +485,7 @@ def solve_batch(
                 f"transmission: expected shape ({m}, a), one row per joint of JT, got {transmission.shape}"
             )
         m = transmission.shape[1]
-    lead = (B,) if single else (B, K)
-    torque = _out("torque", torque, lead + (m,), np.float64)
-    objective = _out("objective", objective, lead, np.float64)
-    wrench_residual = _out("wrench_residual", wrench_residual, lead, np.float64)
-    status = _out("status", status, lead, np.int8)
+    outs = _outputs((B,) if single else (B, K), m, torque, objective, wrench_residual, status)
     spec = {
         "contacts": _contacts(contacts),
         "torque_weights": torque_weights,
@@ -465,26 +496,18 @@ def solve_batch(
         "actuator_names": None if actuator_names is None else list(actuator_names),
     }
     settings = _settings(backend, cones, sides, latitudes, sfce_spacing, internal_forces, paper_model)
-    threads = (
-        _native.default_threads()
-        if threads is None
-        else _count("threads", threads, 1, _native.MAX_THREADS)
-    )
+    threads = _threads(threads)
     errors = _native.solve_batch(
         G,
         JT,
         W3,
         _dumps(spec),
         _dumps(settings),
-        int(threads),
+        threads,
         bool(warm_start),
-        torque.reshape((B, K, m)),
-        objective.reshape((B, K)),
-        wrench_residual.reshape((B, K)),
-        status.reshape((B, K)),
+        *_flat(outs, B, K, m),
     )
-    errs = {(g, k) if not single else g: msg for g, k, msg in errors}
-    return BatchResult(torque, objective, wrench_residual, status, errs)
+    return BatchResult(*outs, _errors(errors, single))
 
 
 HandBatchResult = namedtuple(
@@ -639,13 +662,7 @@ class Hand:
         """
         q, P, N, object_pose = self._poses(joint_positions, positions, normals, object_pose)
         W = _real("W", W)
-        single = W.ndim == 2
-        if single:
-            W3 = W.reshape(W.shape[0], 1, W.shape[1])
-        elif W.ndim == 3:
-            W3 = W
-        else:
-            raise ValueError(f"W: expected shape (B, 6) or (B, K, 6), got {W.shape}")
+        W3, single = _wrenches(W)
         B, K = q.shape[0], W3.shape[1]
         spec = {
             "contacts": _contacts(contacts),
@@ -659,16 +676,8 @@ class Hand:
         spec_json, settings_json = _dumps(spec), _dumps(settings)
         names, _ = self._native.layout(spec_json, settings_json)
         m = len(names)
-        lead = (B,) if single else (B, K)
-        torque = _out("torque", torque, lead + (m,), np.float64)
-        objective = _out("objective", objective, lead, np.float64)
-        wrench_residual = _out("wrench_residual", wrench_residual, lead, np.float64)
-        status = _out("status", status, lead, np.int8)
-        threads = (
-            _native.default_threads()
-            if threads is None
-            else _count("threads", threads, 1, _native.MAX_THREADS)
-        )
+        outs = _outputs((B,) if single else (B, K), m, torque, objective, wrench_residual, status)
+        threads = _threads(threads)
         errors = self._native.solve_batch(
             q,
             W3,
@@ -677,15 +686,11 @@ class Hand:
             object_pose,
             spec_json,
             settings_json,
-            int(threads),
+            threads,
             bool(warm_start),
-            torque.reshape((B, K, m)),
-            objective.reshape((B, K)),
-            wrench_residual.reshape((B, K)),
-            status.reshape((B, K)),
+            *_flat(outs, B, K, m),
         )
-        errs = {(g, k) if not single else g: msg for g, k, msg in errors}
-        return HandBatchResult(torque, objective, wrench_residual, status, errs, list(names))
+        return HandBatchResult(*outs, _errors(errors, single), list(names))
 
 
 def synthetic_grasps(

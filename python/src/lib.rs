@@ -612,6 +612,24 @@ struct Outputs {
 unsafe impl Sync for Outputs {}
 
 impl Outputs {
+    /// The four output arrays for `[B, K, m]`, checked (shape, C order).
+    fn new(
+        [b, k, m]: [usize; 3],
+        torque: &mut PyReadwriteArrayDyn<'_, f64>,
+        objective: &mut PyReadwriteArrayDyn<'_, f64>,
+        wrench_residual: &mut PyReadwriteArrayDyn<'_, f64>,
+        status: &mut PyReadwriteArrayDyn<'_, i8>,
+    ) -> PyResult<Self> {
+        Ok(Self {
+            torque: contiguous_out("torque", torque, &[b, k, m])?.as_mut_ptr(),
+            objective: contiguous_out("objective", objective, &[b, k])?.as_mut_ptr(),
+            residual: contiguous_out("wrench_residual", wrench_residual, &[b, k])?.as_mut_ptr(),
+            status: contiguous_out("status", status, &[b, k])?.as_mut_ptr(),
+            wrenches: k,
+            joints: m,
+        })
+    }
+
     fn write(&self, b: usize, k: usize, r: Result<&Solution, &Error>) {
         let i = b * self.wrenches + k;
         let (code, objective, residual, torque) = match r {
@@ -637,6 +655,21 @@ impl Outputs {
             }
         }
     }
+}
+
+/// Checks `W[B, K, 6]` against the batch's B grasps; returns K (at least 1).
+fn wrench_count(w: &ArrayView3<'_, f64>, b: usize) -> PyResult<usize> {
+    let (bw, k, six) = w.dim();
+    if bw != b || six != 6 {
+        return Err(invalid(format!(
+            "W: expected shape ({b}, 6) or ({b}, K, 6), got {:?}",
+            w.shape()
+        )));
+    }
+    if k == 0 {
+        return Err(invalid("W: expected at least one wrench per grasp (K ≥ 1)"));
+    }
+    Ok(k)
 }
 
 fn contiguous_out<'py, T: numpy::Element>(
@@ -677,7 +710,6 @@ fn solve_batch(
     let (gv, jv, wv) = (g.as_array(), jt.as_array(), w.as_array());
     let (b, six, n) = gv.dim();
     let (bj, m, nj) = jv.dim();
-    let (bw, k, sixw) = wv.dim();
     if six != 6 {
         return Err(invalid(format!(
             "G: expected shape (B, 6, n), got {:?}",
@@ -691,15 +723,7 @@ fn solve_batch(
             jv.shape()
         )));
     }
-    if bw != b || sixw != 6 {
-        return Err(invalid(format!(
-            "W: expected shape ({b}, 6) or ({b}, K, 6), got {:?}",
-            wv.shape()
-        )));
-    }
-    if k == 0 {
-        return Err(invalid("W: expected at least one wrench per grasp (K ≥ 1)"));
-    }
+    let k = wrench_count(&wv, b)?;
     let contacts = spec
         .contacts
         .iter()
@@ -743,14 +767,13 @@ fn solve_batch(
     }
     // One torque per actuator with a transmission, else per joint.
     let m = template.actuated();
-    let out = Outputs {
-        torque: contiguous_out("torque", &mut torque, &[b, k, m])?.as_mut_ptr(),
-        objective: contiguous_out("objective", &mut objective, &[b, k])?.as_mut_ptr(),
-        residual: contiguous_out("wrench_residual", &mut wrench_residual, &[b, k])?.as_mut_ptr(),
-        status: contiguous_out("status", &mut status, &[b, k])?.as_mut_ptr(),
-        wrenches: k,
-        joints: m,
-    };
+    let out = Outputs::new(
+        [b, k, m],
+        &mut torque,
+        &mut objective,
+        &mut wrench_residual,
+        &mut status,
+    )?;
     let source = Arrays {
         g: gv,
         jt: jv,
@@ -931,29 +954,18 @@ impl Hand {
         let wv = w.as_array();
         let source = Posed::new(grasps, &q, Some(wv), &positions, &normals, &poses)?;
         let b = source.q.nrows();
-        let (bw, k, sixw) = wv.dim();
-        if bw != b || sixw != 6 {
-            return Err(invalid(format!(
-                "W: expected shape ({b}, 6) or ({b}, K, 6), got {:?}",
-                wv.shape()
-            )));
-        }
-        if k == 0 {
-            return Err(invalid("W: expected at least one wrench per grasp (K ≥ 1)"));
-        }
+        let k = wrench_count(&wv, b)?;
         if threads == 0 {
             return Err(invalid("threads: expected at least 1 worker thread, got 0"));
         }
         let m = source.grasps.template().actuated();
-        let out = Outputs {
-            torque: contiguous_out("torque", &mut torque, &[b, k, m])?.as_mut_ptr(),
-            objective: contiguous_out("objective", &mut objective, &[b, k])?.as_mut_ptr(),
-            residual: contiguous_out("wrench_residual", &mut wrench_residual, &[b, k])?
-                .as_mut_ptr(),
-            status: contiguous_out("status", &mut status, &[b, k])?.as_mut_ptr(),
-            wrenches: k,
-            joints: m,
-        };
+        let out = Outputs::new(
+            [b, k, m],
+            &mut torque,
+            &mut objective,
+            &mut wrench_residual,
+            &mut status,
+        )?;
         let options = BatchOptions {
             threads: Some(threads),
             warm_start,
