@@ -305,6 +305,9 @@ impl HandFile {
         let mut warnings = Vec::new();
         let mut contacts = Vec::with_capacity(self.contacts.len());
         let mut used = vec![false; robot.independent.len()];
+        // The links whose frames the contacts need, and the moving joints they pass.
+        let mut needed = vec![false; robot.links.len()];
+        let mut moving = Vec::new();
         for (i, c) in self.contacts.iter().enumerate() {
             let at = || label(i, &c.name);
             let model = crate::file::ContactSpec {
@@ -365,11 +368,16 @@ impl HandFile {
                     ))
                 }
             };
-            let chain: Vec<usize> = robot
-                .chain(link)
+            let full_chain = robot.chain(link);
+            needed[link] = true;
+            for &j in &full_chain {
+                needed[robot.joints[j].parent] = true;
+            }
+            let chain: Vec<usize> = full_chain
                 .into_iter()
                 .filter(|&j| robot.joints[j].kind != JointKind::Fixed)
                 .collect();
+            moving.extend(&chain);
             for &j in &chain {
                 used[robot.coupling[j].expect("moving").independent] = true;
             }
@@ -560,9 +568,13 @@ impl HandFile {
                 }
             })
             .collect();
+        moving.sort_unstable();
+        moving.dedup();
         Ok(HandGrasps {
             robot,
             contacts,
+            needed,
+            moving,
             positions: self.contacts.iter().map(|c| c.position).collect(),
             normals: self.contacts.iter().map(|c| c.normal).collect(),
             frames: self.contacts.iter().map(|c| c.frame).collect(),
@@ -646,6 +658,10 @@ pub struct GraspPose<'a> {
 pub struct HandGrasps<'r> {
     robot: &'r Robot,
     contacts: Vec<Placing>,
+    /// The contacts' links and their ancestors: the frames a pose computes.
+    needed: Vec<bool>,
+    /// The moving joints on the contacts' chains.
+    moving: Vec<usize>,
     positions: Vec<Option<[f64; 3]>>,
     normals: Vec<Option<[f64; 3]>>,
     frames: Vec<ContactFrame>,
@@ -745,7 +761,7 @@ impl HandGrasps<'_> {
             UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
         );
         let to_object = object.inverse();
-        let frames = robot.pose(q_ind);
+        let frames = robot.pose_of(q_ind, &self.needed);
 
         // Contacts in the object frame.
         let mut placed = Vec::with_capacity(n);
@@ -809,16 +825,15 @@ impl HandGrasps<'_> {
             // The frame convention normalises n exactly, as the geometry form does.
             placed.push((p, n.normalize()));
         }
-        // Joint axes and origins in the object frame.
-        let axes: Vec<(Vector3<f64>, Vector3<f64>)> = robot
-            .joints
-            .iter()
-            .zip(&frames.joints)
-            .map(|(j, f)| {
-                let t = to_object * f;
-                (t.rotation * j.axis.into_inner(), t.translation.vector)
-            })
-            .collect();
+        // The chains' joint axes and origins in the object frame.
+        let mut axes = vec![(Vector3::zeros(), Vector3::zeros()); robot.joints.len()];
+        for &j in &self.moving {
+            let t = to_object * frames.joints[j];
+            axes[j] = (
+                t.rotation * robot.joints[j].axis.into_inner(),
+                t.translation.vector,
+            );
+        }
         let m = self.rows.len();
         let nf = self.contacts.iter().map(|c| c.model.dim()).sum();
         let mut g = Matrix::zeros(6, nf);

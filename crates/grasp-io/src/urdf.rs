@@ -874,11 +874,23 @@ impl Robot {
     /// Frames of every link and joint at the independent coordinates `q_ind` (one per
     /// [`Robot::independent`]), in the root link's frame.
     pub fn pose(&self, q_ind: &[f64]) -> Pose {
+        self.pose_where(q_ind, |_| true)
+    }
+
+    /// [`Robot::pose`] of the links marked in `needed` and the joints above them only
+    /// (a marked link's parent must be marked too: the contacts' links and their
+    /// ancestors); the other frames are left at the identity. A hand on an arm, or an
+    /// MJCF scene, has many bodies that no contact's chain passes through.
+    pub fn pose_of(&self, q_ind: &[f64], needed: &[bool]) -> Pose {
+        self.pose_where(q_ind, |l| needed[l])
+    }
+
+    fn pose_where(&self, q_ind: &[f64], needed: impl Fn(usize) -> bool) -> Pose {
         let q = self.full_positions(q_ind);
         let mut links = vec![Isometry3::identity(); self.links.len()];
         let mut joints = vec![Isometry3::identity(); self.joints.len()];
         for &l in &self.order {
-            let Some(ji) = self.parent_joint[l] else {
+            let Some(ji) = self.parent_joint[l].filter(|_| needed(l)) else {
                 continue;
             };
             let j = &self.joints[ji];
