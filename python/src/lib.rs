@@ -872,9 +872,17 @@ impl Hand {
 impl Hand {
     #[new]
     fn new(path: &str) -> PyResult<Self> {
-        let robot = parser()
-            .robot(Path::new(path))
-            .map_err(|e| invalid(format!("{path}: {e}")))?;
+        // (The parser's own messages name the file and line.)
+        match std::fs::metadata(path) {
+            Err(e) => return Err(invalid(format!("{path}: cannot read the robot file: {e}"))),
+            Ok(m) if m.is_dir() => {
+                return Err(invalid(format!(
+                    "{path}: expected a URDF or MJCF file, got a directory"
+                )))
+            }
+            Ok(_) => {}
+        }
+        let robot = parser().robot(Path::new(path)).map_err(invalid)?;
         Ok(Self {
             robot,
             path: path.to_string(),

@@ -147,8 +147,12 @@ def test_a_hand_reports_its_file_and_pickles():
     assert "robot0:S_thtip" in hand.sites and "robot0:FFJ3" in hand.joint_names
     again = pickle.loads(pickle.dumps(hand))
     assert again.joint_names == hand.joint_names and again.name == hand.name
-    with pytest.raises(ValueError, match="no_such_hand.urdf"):
+    with pytest.raises(ValueError, match="no_such_hand.urdf: cannot read the robot file"):
         gt.Hand(HANDS / "no_such_hand.urdf")
+    with pytest.raises(ValueError, match="got a directory"):
+        gt.Hand(HANDS)
+    with pytest.raises(ValueError, match="allegro-pinch.json: .*not well-formed XML"):
+        gt.Hand(HANDS / "allegro-pinch.json")
 
 
 def test_the_planner_example_runs(root):
