@@ -202,3 +202,15 @@ def test_problems_solvers_and_results_pickle(root):
         np.testing.assert_array_equal(r3.torque, r.torque)
         assert r3.diagnostics == r.diagnostics
         assert "optimal" in repr(r3)
+
+
+def test_the_readmes_python_block_runs(root, monkeypatch):
+    text = (root / "README.md").read_text()
+    start = text.index("## Python\n")
+    block = text[text.index("```python\n", start) + len("```python\n") :]
+    block = block[: block.index("```")]
+    monkeypatch.chdir(root)
+    scope = {}
+    exec(compile(block, "README.md (Python)", "exec"), scope)
+    assert scope["r"].status == "optimal" and (scope["out"].status == 0).all()
+    assert scope["a"].G.shape == (10_000, 6, 9) and not scope["a"].errors
