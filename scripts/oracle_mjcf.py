@@ -12,7 +12,10 @@ writes per configuration:
   (`Jᵀ = Pᵀ Jᵀ_full`);
 - `transmission`: T by joint and actuator name, from `data.actuator_moment` after
   `mj_forward`, reduced the same way (`T = Pᵀ T_full`);
-- `grasp_matrix`: the expected G.
+- `grasp_matrix`: the expected G;
+
+and per hand `actuator_limits`, the bound on each actuator's force that
+`"torque_limits": "model"` must give, from MuJoCo's compiled ranges.
 
 MuJoCo needs every mesh a file names; the fixtures carry none. The script expands the
 includes itself, drops <asset>, <contact>, <sensor> and every <geom>, and bounds body
@@ -51,6 +54,18 @@ HANDS = [
      ["body:thumb_distal", "body:index_distal", "body:pinky_distal", "body:index_proximal"], 4),
     ("tendon-test", "fixtures/mjcf/test/tendon_finger.xml",
      ["f1_tip_site", "f2_tip_site", "th_tip_site", "body:f1_mid"], 5),
+    # MuJoCo Menagerie's hands (kinematics only: fixtures/mjcf/menagerie/README.md).
+    ("menagerie-shadow", "fixtures/mjcf/menagerie/shadow_right.xml",
+     ["body:rh_ffdistal", "body:rh_mfdistal", "body:rh_rfdistal", "body:rh_lfdistal",
+      "body:rh_thdistal", "grasp_site"], 11),
+    ("menagerie-allegro", "fixtures/mjcf/menagerie/allegro_right.xml",
+     ["body:ff_tip", "body:mf_tip", "body:rf_tip", "body:th_tip", "body:ff_medial"], 12),
+    ("menagerie-leap", "fixtures/mjcf/menagerie/leap_right.xml",
+     ["body:if_ds", "body:mf_ds", "body:rf_ds", "body:th_ds", "body:th_px"], 13),
+    # PID plugin actuators, bodies named with slashes, a site on the world body.
+    ("menagerie-dexee", "fixtures/mjcf/menagerie/shadow_dexee.xml",
+     ["F0/fingertip_site", "F1/fingertip_site", "F2/fingertip_site", "F0/distal_site",
+      "body:F1/finger_middle"], 14),
 ]
 
 
@@ -127,6 +142,29 @@ def couplings(m):
             at = lead
         resolved[j] = (at, mult, off)
     return resolved
+
+
+def actuator_limits(m):
+    """Per actuator, the bound |u| ≤ limit of `"torque_limits": "model"` from MuJoCo's
+    compiled model (defaults, classes and autolimits resolved by MuJoCo): the largest
+    symmetric range inside forcerange when force-limited; else, for a force that is a
+    fixed gain times the control (no bias), inside gain × ctrlrange when ctrl-limited;
+    else none (None)."""
+    out = {}
+    for a in range(m.nu):
+        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a)
+        sym = lambda lo, hi: max(min(-lo, hi), 0.0)
+        if m.actuator_forcelimited[a]:
+            limit = sym(*m.actuator_forcerange[a])
+        elif (m.actuator_ctrllimited[a] and m.actuator_biastype[a] == mujoco.mjtBias.mjBIAS_NONE
+              and m.actuator_gaintype[a] == mujoco.mjtGain.mjGAIN_FIXED):
+            g = m.actuator_gainprm[a][0]
+            lo, hi = sorted(g * m.actuator_ctrlrange[a])
+            limit = sym(lo, hi)
+        else:
+            limit = None
+        out[name] = limit if limit else None
+    return out
 
 
 def sites_of(m, names):
@@ -253,7 +291,8 @@ def main():
                 "transmission": tr,
                 "grasp_matrix": np.array(gcols).T.tolist(),
             })
-        out = {"model": path, "mujoco": mujoco.__version__, "cases": cases}
+        out = {"model": path, "mujoco": mujoco.__version__,
+               "actuator_limits": actuator_limits(m), "cases": cases}
         with open(os.path.join(OUT, f"{name}.json"), "w") as f:
             json.dump(out, f, indent=0)
         print(f"{name}: {len(cases)} configurations, nv {m.nv}, nu {m.nu}")

@@ -12,9 +12,9 @@
 //!   the URDF reader's convention (a joint frame at the anchor).
 //! - **Couplings:** `<equality><joint>` with a linear `polycoef`, and `<equality><tendon>`
 //!   on a fixed tendon of two joints, become mimic couplings (the later joint follows).
-//! - **Actuators:** `motor`, `general`, `position`, `velocity`, `intvelocity` and
-//!   `cylinder` on a `joint` or a fixed `tendon`: the moment arm is the gear, times the
-//!   tendon's coefficients. Gains and biases do not enter statics.
+//! - **Actuators:** `motor`, `general`, `position`, `velocity`, `intvelocity`,
+//!   `cylinder` and `plugin` on a `joint` or a fixed `tendon`: the moment arm is the
+//!   gear, times the tendon's coefficients. Gains and biases do not enter statics.
 //!
 //! A `free` joint on a body directly under `<worldbody>` (a floating hand or object) is
 //! held fixed, and that body's frame becomes the reference frame; `<frame>` moves the
@@ -236,7 +236,13 @@ impl Reader {
 struct Compiler {
     degrees: bool,
     eulerseq: [u8; 3],
+    /// `autolimits` (MuJoCo's default, true): a range alone makes its element limited.
+    /// When false, MuJoCo refuses a range whose `limited` is left unspecified.
+    autolimits: bool,
 }
+
+/// A range `(lower, upper)` that limits, or None.
+type LimitedRange = Option<(f64, f64)>;
 
 /// Attributes of one element kind per default class, with the class's parent.
 #[derive(Default)]
@@ -245,15 +251,22 @@ struct Defaults {
     attrs: HashMap<(String, &'static str), Vec<(String, String)>>,
 }
 
-const ACTUATORS: [&str; 6] = [
+/// Actuators whose force statics can hold: its moment arms on the joints are the
+/// gear, and only its `forcerange` (or, with a fixed gain and no bias, its
+/// `ctrlrange`) bounds it. A `plugin` actuator's force is the plugin's (a PID
+/// controller, say): only its `forcerange` bounds it.
+const ACTUATORS: [&str; 7] = [
     "motor",
     "general",
     "position",
     "velocity",
     "intvelocity",
     "cylinder",
+    "plugin",
 ];
-const IGNORED_ACTUATORS: [&str; 4] = ["damper", "muscle", "adhesion", "plugin"];
+/// Actuators that exert no force at rest (`damper`), only pull through a length- and
+/// velocity-dependent law (`muscle`), or act on contacts (`adhesion`).
+const IGNORED_ACTUATORS: [&str; 3] = ["damper", "muscle", "adhesion"];
 
 fn default_kind(name: &str) -> Option<&'static str> {
     match name {
@@ -390,15 +403,36 @@ impl<'a> View<'a> {
         }
     }
 
-    fn range(&self, key: &str) -> Result<Option<(f64, f64)>, ProblemError> {
-        match self.fixed::<2>(key)? {
-            None => Ok(None),
-            Some([lo, hi]) if lo <= hi => Ok(Some((lo, hi))),
-            Some([lo, hi]) => Err(self.r.err(
-                self.e,
-                format!("{key}=\"{lo} {hi}\": the lower bound is above the upper"),
-            )),
-        }
+    /// The element's `{prefix}range` when it limits (None when it does not), by
+    /// MuJoCo's rules: `{prefix}limited="true"` needs lower < upper;
+    /// unspecified (or `auto`), a range with lower < upper limits when the compiler's
+    /// `autolimits` is on (any other range, `0 0` included, does not), and without
+    /// autolimits any range but `0 0` is an error.
+    fn limits(&self, prefix: &str, autolimits: bool) -> Result<LimitedRange, ProblemError> {
+        let key = format!("{prefix}range");
+        let range = self.fixed::<2>(&key)?.map(|[lo, hi]| (lo, hi));
+        let ordered = range.is_some_and(|(lo, hi)| lo < hi);
+        let limited = match self.flag(&format!("{prefix}limited"))? {
+            Some(true) if !ordered => {
+                return Err(self.r.err(
+                    self.e,
+                    match range {
+                        Some((lo, hi)) => format!("{prefix}limited=\"true\" with {key}=\"{lo} {hi}\": expected lower < upper"),
+                        None => format!("{prefix}limited=\"true\" without a {key}"),
+                    },
+                ))
+            }
+            Some(l) => l,
+            None if autolimits => ordered,
+            None if range.is_some_and(|r| r != (0.0, 0.0)) => {
+                return Err(self.r.err(
+                    self.e,
+                    format!("{key} is given but not {prefix}limited, and the compiler's autolimits is false (MuJoCo refuses this model): set {prefix}limited=\"true\" or \"false\", or autolimits=\"true\""),
+                ))
+            }
+            None => false,
+        };
+        Ok(range.filter(|_| limited))
     }
 
     /// `pos` and the orientation (at most one of quat, euler, axisangle, xyaxes, zaxis).
@@ -646,10 +680,8 @@ impl Ctx<'_> {
                 }
             };
             let reference = to_rad(jv.leading("ref", 1)?.unwrap_or(0.0));
-            let limited = jv.flag("limited")?;
             let range = jv
-                .range("range")?
-                .filter(|_| limited != Some(false))
+                .limits("", self.c.autolimits)?
                 .map(|(a, b)| (to_rad(a), to_rad(b)));
             let child = t.add_link(format!("{name}/{jname}"), j.line);
             t.add_joint(
@@ -771,6 +803,7 @@ impl Robot {
         let mut c = Compiler {
             degrees: true,
             eulerseq: *b"xyz",
+            autolimits: true,
         };
         let mut d = Defaults::default();
         d.parent.insert("main".into(), None);
@@ -797,6 +830,15 @@ impl Robot {
                             ));
                         }
                         c.eulerseq.copy_from_slice(b);
+                    }
+                    match e.attr("autolimits") {
+                        None | Some("true") => c.autolimits = true,
+                        Some("false") => c.autolimits = false,
+                        Some(v) => {
+                            return Err(
+                                r.err(e, format!("autolimits=\"{v}\": expected true or false"))
+                            )
+                        }
                     }
                     if e.attr("coordinate").is_some_and(|v| v != "local") {
                         return Err(r.err(
@@ -1009,10 +1051,9 @@ impl Robot {
                     ));
                     continue;
                 };
-                let forcerange = v.range("forcerange")?;
-                let ctrlrange = v.range("ctrlrange")?;
-                let force_limited = v.flag("forcelimited")?.unwrap_or(forcerange.is_some());
-                let ctrl_limited = v.flag("ctrllimited")?.unwrap_or(ctrlrange.is_some());
+                // The ranges that limit (None: unlimited).
+                let forcerange = v.limits("force", c.autolimits)?;
+                let ctrlrange = v.limits("ctrl", c.autolimits)?;
                 // The largest |u| inside the range on both sides of 0.
                 let symmetric = |(lo, hi): (f64, f64)| (-lo).min(hi).max(0.0);
                 let bias = match e.name.as_str() {
@@ -1021,16 +1062,14 @@ impl Robot {
                     _ => true,
                 };
                 let gain_fixed = v.get("gaintype").unwrap_or("fixed") == "fixed";
-                let (limit, source, range) = if force_limited && forcerange.is_some() {
-                    let fr = forcerange.unwrap_or_default();
+                let (limit, source, range) = if let Some(fr) = forcerange {
                     (Some(symmetric(fr)), LimitSource::Forcerange, fr)
-                } else if ctrl_limited && ctrlrange.is_some() && !bias && gain_fixed {
+                } else if let Some((lo, hi)) = ctrlrange.filter(|_| !bias && gain_fixed) {
                     let gain = if e.name == "motor" {
                         1.0
                     } else {
                         v.leading("gainprm", 10)?.unwrap_or(1.0)
                     };
-                    let (lo, hi) = ctrlrange.unwrap_or_default();
                     let (a, b) = (gain * lo, gain * hi);
                     let fr = (a.min(b), a.max(b));
                     (Some(symmetric(fr)), LimitSource::Ctrlrange, fr)

@@ -13,7 +13,17 @@ fn repo(p: &str) -> PathBuf {
 
 #[test]
 fn jacobians_and_transmissions_match_mujoco() {
-    for name in ["shadow", "adroit", "robotiq-s", "jaco", "tendon-test"] {
+    for name in [
+        "shadow",
+        "adroit",
+        "robotiq-s",
+        "jaco",
+        "tendon-test",
+        "menagerie-shadow",
+        "menagerie-allegro",
+        "menagerie-leap",
+        "menagerie-dexee",
+    ] {
         let dir = repo("fixtures/mjcf/oracle");
         let text = std::fs::read_to_string(dir.join(format!("{name}.json"))).unwrap();
         let oracle: serde_json::Value = serde_json::from_str(&text).unwrap();
@@ -78,6 +88,16 @@ fn jacobians_and_transmissions_match_mujoco() {
                     );
                 }
             }
+            // `"torque_limits": "model"`: each actuator's bound as MuJoCo's compiled
+            // ranges give it (classes, autolimits, gains resolved by MuJoCo).
+            let limits = p
+                .torque_limits
+                .as_ref()
+                .expect("model limits were asked for");
+            for (a, aname) in t.actuator_names.iter().enumerate() {
+                let want = oracle["actuator_limits"][aname].as_f64();
+                assert_eq!(limits[a], want, "{label}: the limit of {aname}");
+            }
             let g: Vec<Vec<f64>> = serde_json::from_value(case["grasp_matrix"].clone()).unwrap();
             let gscale = g.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
             for r in 0..6 {
@@ -120,12 +140,17 @@ fn malformed_mjcf_is_a_named_error() {
         (body("<site quat=\"1 0 0 0\" euler=\"0 0 0\"/>"), "more than one orientation"),
         ("<mujoco><compiler angle=\"grad\"/></mujoco>".to_string(), "degree or radian"),
         ("<mujoco><compiler eulerseq=\"xxq\"/></mujoco>".to_string(), "eulerseq"),
+        ("<mujoco><compiler autolimits=\"yes\"/></mujoco>".to_string(), "expected true or false"),
+        // Without autolimits MuJoCo refuses a range whose `limited` is unspecified.
+        ("<mujoco><compiler autolimits=\"false\"/><worldbody><body><joint range=\"0 1\"/></body></worldbody></mujoco>".to_string(), "range is given but not limited"),
+        ("<mujoco><compiler autolimits=\"false\"/><worldbody><body><joint name=\"a\"/></body></worldbody><actuator><motor joint=\"a\" forcerange=\"-1 1\" forcelimited=\"auto\"/></actuator></mujoco>".to_string(), "forcerange is given but not forcelimited"),
         ("<mujoco><include file=\"missing.xml\"/></mujoco>".to_string(), "cannot read"),
         ("<mujoco><actuator><motor joint=\"nope\"/></actuator></mujoco>".to_string(), "not a hinge or slide joint"),
         ("<mujoco><worldbody><body><joint name=\"a\"/><joint name=\"b\"/></body></worldbody><equality><joint joint1=\"a\" joint2=\"b\" polycoef=\"0 1 2 0 0\"/></equality></mujoco>".to_string(), "only a linear coupling"),
         ("<mujoco><worldbody><body><joint name=\"a\"/></body></worldbody><equality><connect body1=\"a\" body2=\"b\" anchor=\"0 0 0\"/></equality></mujoco>".to_string(), "loop-closing"),
         ("<mujoco><worldbody><body><joint name=\"a\"/></body></worldbody><tendon><spatial name=\"s\"/></tendon><actuator><motor tendon=\"s\"/></actuator></mujoco>".to_string(), "spatial tendon"),
-        ("<mujoco><worldbody><body><joint name=\"a\"/><joint name=\"b\"/></body></worldbody><actuator><motor joint=\"a\" forcerange=\"2 1\"/></actuator></mujoco>".to_string(), "lower bound is above"),
+        ("<mujoco><worldbody><body><joint name=\"a\"/><joint name=\"b\"/></body></worldbody><actuator><motor joint=\"a\" forcerange=\"2 1\" forcelimited=\"true\"/></actuator></mujoco>".to_string(), "expected lower < upper"),
+        (body("<joint limited=\"true\"/>"), "limited=\"true\" without a range"),
         (format!("<mujoco><worldbody>{}{}</worldbody></mujoco>", "<body>".repeat(100_000), "</body>".repeat(100_000)), "nested"),
     ] {
         let msg = parse_err(&text);
@@ -141,6 +166,35 @@ fn malformed_mjcf_is_a_named_error() {
     .unwrap();
     let e = Robot::load(&dir.join("self.xml")).unwrap_err().to_string();
     assert!(e.contains("nested more than"), "{e}");
+}
+
+/// With `autolimits="false"`, only what `limited`, `forcelimited` and `ctrllimited`
+/// say limits: as in MuJoCo, which loads this model with j unlimited, `f` force-limited
+/// and `c`'s control range not a limit. With autolimits (the default), a range limits
+/// only when its lower bound is below its upper, as in MuJoCo.
+#[test]
+fn without_autolimits_the_flags_decide() {
+    let text = r#"<mujoco><compiler autolimits="false"/><default><motor ctrllimited="false"/></default>
+      <worldbody><body name="b"><joint name="j" axis="0 0 1" range="0 90" limited="false"/>
+      <body name="c"><joint name="k" axis="0 1 0" range="-10 10" limited="true"/></body></body></worldbody>
+      <actuator><motor name="f" joint="j" forcerange="-2 3" forcelimited="true"/>
+      <motor name="c" joint="k" ctrlrange="-1 1"/></actuator></mujoco>"#;
+    let r = Robot::parse_mjcf(text, "a.xml", None).unwrap();
+    let (j, k) = (
+        &r.joints[r.joint("j").unwrap()],
+        &r.joints[r.joint("k").unwrap()],
+    );
+    assert_eq!((j.lower, j.upper), (None, None));
+    assert!((k.upper.unwrap() - 10f64.to_radians()).abs() < 1e-15);
+    let limit = |name: &str| r.actuators.iter().find(|a| a.name == name).unwrap().limit;
+    assert_eq!(limit("f"), Some(2.0));
+    assert_eq!(limit("c"), None);
+    let text = r#"<mujoco><worldbody><body name="b"><joint name="j" axis="0 0 1" range="2 1"/>
+      </body></worldbody><actuator><motor name="f" joint="j" forcerange="0 0" ctrlrange="1 -1"/>
+      </actuator></mujoco>"#;
+    let r = Robot::parse_mjcf(text, "b.xml", None).unwrap();
+    assert_eq!(r.joints[r.joint("j").unwrap()].upper, None);
+    assert_eq!(r.actuators[0].limit, None);
 }
 
 #[test]
