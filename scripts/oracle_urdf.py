@@ -9,7 +9,10 @@ fingertip contacts pushing toward their common centre, and writes, per configura
 - `jacobian_transpose`: the expected Jᵀ, one row per independent joint, by name, from
   Pinocchio's frame Jacobian (LOCAL_WORLD_ALIGNED, at the contact point) and the
   contact frame convention of docs/geometry.md;
-- `grasp_matrix`: the expected G.
+- `grasp_matrix`: the expected G;
+
+and per hand `effort_limits`, Pinocchio's effort limit of each independent joint, which
+`"torque_limits": "model"` must give.
 
 The Allegro and Ability hands are loaded with `buildModelFromUrdf(path, mimic=True)`, so
 Pinocchio itself couples the Ability hand's mimic joints. Pinocchio couples one level of
@@ -43,6 +46,13 @@ HANDS = [
      ["thumb_tip", "index_tip", "middle_tip", "ring_tip", "pinky_tip"], 2),
     ("linkage-gripper", "fixtures/urdf/test/linkage_gripper.urdf", False,
      ["left_tip", "right_tip", "thumb_tip", "left_mid", "right_roll_link"], 3),
+    # DexSuite's dex-urdf (fixtures/urdf/dex-urdf/README.md).
+    ("leap", "fixtures/urdf/dex-urdf/leap_hand_right.urdf", True,
+     ["thumb_tip_head", "index_tip_head", "middle_tip_head", "ring_tip_head"], 4),
+    ("shadow-urdf", "fixtures/urdf/dex-urdf/shadow_hand_right.urdf", True,
+     ["fftip", "mftip", "rftip", "lftip", "thtip"], 5),
+    ("barrett", "fixtures/urdf/dex-urdf/bhand_model.urdf", True,
+     ["finger_1_dist_link", "finger_2_dist_link", "finger_3_dist_link"], 6),
 ]
 
 
@@ -210,8 +220,18 @@ def main():
                 "grasp_matrix": np.array(g_cols).T.tolist(),
                 "jacobian_transpose": jt,
             })
+        # `"torque_limits": "model"`: Pinocchio's effort limit of each independent
+        # joint (none when the URDF gives no positive effort).
+        efforts = {}
+        for i in range(1, model.njoints):
+            jm = model.joints[i]
+            if jm.shortname() == "JointModelMimic" or model.names[i] not in independent:
+                continue
+            e = float(model.effortLimit[jm.idx_v])
+            efforts[model.names[i]] = e if np.isfinite(e) and e > 0 else None
         out = {
             "generator": "scripts/oracle_urdf.py",
+            "effort_limits": efforts,
             "oracle": f"pinocchio {pin.__version__} (buildModelFromUrdf, mimic={use_mimic}), "
                       "getFrameJacobian LOCAL_WORLD_ALIGNED at the contact point",
             "urdf": os.path.relpath(path, OUT),

@@ -23,7 +23,14 @@ const ROBOTS: [&str; 3] = [
 
 #[test]
 fn jacobians_match_pinocchio() {
-    for name in ["allegro", "ability", "linkage-gripper"] {
+    for name in [
+        "allegro",
+        "ability",
+        "linkage-gripper",
+        "leap",
+        "shadow-urdf",
+        "barrett",
+    ] {
         let dir = repo("fixtures/urdf/oracle");
         let text = std::fs::read_to_string(dir.join(format!("{name}.json"))).unwrap();
         let oracle: serde_json::Value = serde_json::from_str(&text).unwrap();
@@ -81,6 +88,15 @@ fn jacobians_match_pinocchio() {
             let got: Vec<&String> = built.report.defaulted_joints.iter().collect();
             assert_eq!(got, expected_defaulted, "{label}: defaulted joints");
             assert_eq!(built.report.torque_limits, "model");
+            // Each joint's bound is Pinocchio's effort limit (none without one).
+            let limits = p
+                .torque_limits
+                .as_ref()
+                .expect("model limits were asked for");
+            for (j, jname) in p.joint_names.iter().enumerate() {
+                let want = oracle["effort_limits"][jname].as_f64();
+                assert_eq!(limits[j], want, "{label}: the effort limit of {jname}");
+            }
         }
         eprintln!(
             "{name}: {} configurations, worst Jᵀ error {worst:e} relative",
