@@ -439,3 +439,40 @@ fn norm2_scaled(a: &[f64]) -> f64 {
     }
     big * a.iter().map(|v| (v / big) * (v / big)).sum::<f64>().sqrt()
 }
+
+/// What was computed from the last matrix seen, keyed by its shape, its entries' bits
+/// and a setting (a tolerance's bits, say). Held per thread by its users: a batch of
+/// grasps of one hand passes the same transmission T for every grasp, and its
+/// decompositions need not be repeated.
+#[derive(Default)]
+pub(crate) struct LastMatrix<V> {
+    key: Vec<u64>,
+    value: Option<V>,
+}
+
+impl<V: Clone> LastMatrix<V> {
+    fn matches(&self, m: &Matrix, setting: u64) -> bool {
+        self.value.is_some()
+            && self.key.len() == 3 + m.data.len()
+            && self.key[..3] == [m.rows as u64, m.cols as u64, setting]
+            && self.key[3..]
+                .iter()
+                .zip(&m.data)
+                .all(|(k, x)| *k == x.to_bits())
+    }
+
+    /// The value stored for `m` and `setting`, if the last one stored was for them.
+    pub(crate) fn get(&self, m: &Matrix, setting: u64) -> Option<V> {
+        self.matches(m, setting)
+            .then(|| self.value.clone())
+            .flatten()
+    }
+
+    /// Stores `value` as the one for `m` and `setting`.
+    pub(crate) fn put(&mut self, m: &Matrix, setting: u64, value: V) {
+        self.key.clear();
+        self.key.extend([m.rows as u64, m.cols as u64, setting]);
+        self.key.extend(m.data.iter().map(|x| x.to_bits()));
+        self.value = Some(value);
+    }
+}

@@ -262,17 +262,24 @@ fn actuator_space(
     };
     let tm = &t.matrix;
     let (m, a) = (tm.nrows(), tm.ncols());
-    let dec = decompose(tm, RankThreshold::Relative(rank_tolerance)).map_err(|_| {
-        ModelError::Decomposition {
-            what: "the transmission T",
-            rows: m,
-            cols: a,
+    let setting = rank_tolerance.to_bits();
+    let (tplus, q2t) = match T_FACTORS.with(|c| c.borrow().get(tm, setting)) {
+        Some(factors) => factors,
+        None => {
+            let dec = decompose(tm, RankThreshold::Relative(rank_tolerance)).map_err(|_| {
+                ModelError::Decomposition {
+                    what: "the transmission T",
+                    rows: m,
+                    cols: a,
+                }
+            })?;
+            // T has independent columns (validated), so T⁺ T = I and u = T⁺ τ.
+            let factors = (dec.pseudo_inverse(), dec.left_null.transpose());
+            T_FACTORS.with(|c| c.borrow_mut().put(tm, setting, factors.clone()));
+            factors
         }
-    })?;
-    // T has independent columns (validated), so T⁺ T = I and u = T⁺ τ.
-    let tplus = dec.pseudo_inverse();
+    };
     let jt = tplus.matmul(&p.jacobian_transpose);
-    let q2t = dec.left_null.transpose();
     let unactuated = q2t.matmul(&p.jacobian_transpose);
     Ok((
         jt,
@@ -295,6 +302,13 @@ fn actuator_space(
             joint_reach: Vec::new(),
         }),
     ))
+}
+
+thread_local! {
+    /// `T⁺` and `Q₂ᵀ` of the last transmission this thread factored: a batch of grasps
+    /// of one hand shares its T.
+    static T_FACTORS: std::cell::RefCell<crate::matrix::LastMatrix<(Matrix, Matrix)>> =
+        std::cell::RefCell::new(crate::matrix::LastMatrix::default());
 }
 
 /// Largest ratio between the norms of two rows of `[G; Jᵀ]` for which `euclidean`

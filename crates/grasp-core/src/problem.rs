@@ -486,6 +486,11 @@ fn validate_transmission(t: &Transmission, m: usize) -> Result<(), ProblemError>
             ));
         }
     }
+    // A batch of grasps of one hand shares its T: the last T that passed on this
+    // thread passes again without its rank decision.
+    if FULL_RANK_TRANSMISSION.with(|c| c.borrow().get(&t.matrix, 0).is_some()) {
+        return Ok(());
+    }
     // Columns at unit length: an actuator's gear or tendon radius is not a reason to
     // call it dependent.
     let norms: Vec<f64> = (0..a)
@@ -511,7 +516,14 @@ fn validate_transmission(t: &Transmission, m: usize) -> Result<(), ProblemError>
             format!("rank {rank}"),
         ));
     }
+    FULL_RANK_TRANSMISSION.with(|c| c.borrow_mut().put(&t.matrix, 0, ()));
     Ok(())
+}
+
+thread_local! {
+    /// The last transmission this thread found of full rank.
+    static FULL_RANK_TRANSMISSION: std::cell::RefCell<crate::matrix::LastMatrix<()>> =
+        std::cell::RefCell::new(crate::matrix::LastMatrix::default());
 }
 
 /// Relative singular value below which T's columns count as dependent.

@@ -194,3 +194,42 @@ fn an_unactuated_joint_that_must_carry_torque_is_infeasible_and_named() {
     }
     assert!(named > 0, "no grasp needed joint 0");
 }
+
+/// A T whose columns are dependent is refused by name, whichever T of the same shape
+/// this thread validated before (validation reuses the rank decision of the last T
+/// that passed, for the same T only).
+#[test]
+fn dependent_actuators_are_refused_after_an_independent_t_of_the_same_shape() {
+    for seed in 0..40 {
+        let p = grasp(seed);
+        let m = p.joints();
+        let a = m.min(3 + seed as usize % (m - 2));
+        let good = random_transmission(seed, m, a);
+        // Column a−1 a combination of the first two: rank a − 1.
+        let mut bad = good.clone();
+        for i in 0..m {
+            bad[(i, a - 1)] = 0.5 * good[(i, 0)] - 2.0 * good[(i, 1)];
+        }
+        let with = |t: &Matrix| {
+            let mut q = p.clone();
+            q.transmission = Some(Transmission {
+                matrix: t.clone(),
+                actuator_names: Vec::new(),
+            });
+            q.validate()
+        };
+        for _ in 0..2 {
+            with(&good).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+            let e = with(&bad).expect_err("a dependent column").to_string();
+            assert!(e.contains("linearly independent columns"), "{e}");
+        }
+        // One entry changed in its last bit is a different T: checked afresh.
+        let mut near = bad.clone();
+        near[(0, a - 1)] = f64::from_bits(near[(0, a - 1)].to_bits() ^ 1);
+        with(&good).unwrap();
+        assert!(
+            with(&near).is_err(),
+            "seed {seed}: a rank-deficient T within rounding"
+        );
+    }
+}
