@@ -16,8 +16,9 @@
 //!   `cylinder` and `plugin` on a `joint` or a fixed `tendon`: the moment arm is the
 //!   gear, times the tendon's coefficients. Gains and biases do not enter statics.
 //!
-//! A `free` joint on a body directly under `<worldbody>` (a floating hand or object) is
-//! held fixed, and that body's frame becomes the reference frame; `<frame>` moves the
+//! A `free` joint on a body directly under `<worldbody>` with joints below it (a
+//! floating hand) is held fixed, and that body's frame becomes the reference frame; a
+//! free body without (an object of the scene) stays where the file puts it; `<frame>` moves the
 //! bodies and sites it holds. `free` and `ball` joints inside the tree, `<composite>`,
 //! `<flexcomp>`, `<replicate>`, `<attach>` and `<equality><connect>` change the
 //! kinematics and are errors. Meshes,
@@ -586,6 +587,15 @@ impl Tree {
     }
 }
 
+/// Whether a `<joint>` other than a free one sits in `body` or below it.
+fn moves_below(body: &El) -> bool {
+    body.children.iter().any(|c| match c.name.as_str() {
+        "joint" => c.attr("type") != Some("free"),
+        "body" | "frame" => moves_below(c),
+        _ => false,
+    })
+}
+
 struct Ctx<'a> {
     r: &'a Reader,
     d: &'a Defaults,
@@ -641,7 +651,10 @@ impl Ctx<'_> {
             };
             match kind {
                 "hinge" | "slide" => moving.push((*j, kind == "hinge")),
-                "free" if top => {
+                // A free body with joints below it is a floating hand, mounted at the
+                // reference frame; one without is an object of the scene (Menagerie's
+                // scene files hold one), which moves nothing of the hand.
+                "free" if top && moves_below(e) => {
                     t.warnings.push(format!(
                         "{}: {}: the free joint of `{name}` is held fixed; that body's frame is the reference frame of object_pose",
                         self.r.files[j.file],
@@ -649,6 +662,11 @@ impl Ctx<'_> {
                     ));
                     local = Isometry3::identity();
                 }
+                "free" if top => t.warnings.push(format!(
+                    "{}: {}: `{name}` is a free body that no joint below it moves (an object of the scene?): held where the file puts it; it is not part of the hand",
+                    self.r.files[j.file],
+                    self.r.at(j)
+                )),
                 "free" | "ball" => {
                     return Err(self.r.err(
                         j,

@@ -311,3 +311,34 @@ fn large_models_load_and_name_late_lines() {
         .to_string();
     assert!(e.contains("line 9003") && e.contains("zero axis"), "{e}");
 }
+
+/// Menagerie's scene file holds the hand and a free object: the object is not the
+/// hand's mount, so the hand is where the hand's own file puts it, and the warning
+/// says so.
+#[test]
+fn a_free_object_in_the_scene_is_not_the_hand() {
+    let dir = repo("fixtures/mjcf/menagerie");
+    let hand = Robot::load(&dir.join("shadow_right.xml")).unwrap();
+    let scene = Robot::load(&dir.join("scene_right.xml")).unwrap();
+    assert_eq!(hand.independent, scene.independent);
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("`object` is a free body") && w.contains("not part of the hand")),
+        "{:?}",
+        scene.warnings
+    );
+    let q: Vec<f64> = (0..hand.independent.len())
+        .map(|i| 0.1 * (i as f64 + 1.0).sin())
+        .collect();
+    let (a, b) = (hand.pose(&q), scene.pose(&q));
+    for (i, name) in hand.links.iter().enumerate() {
+        let j = scene.link(name).unwrap();
+        let d = a.links[i].inverse() * b.links[j];
+        assert!(
+            d.translation.vector.norm() < 1e-15 && d.rotation.angle() < 1e-15,
+            "{name} moved"
+        );
+    }
+}
