@@ -548,6 +548,8 @@ struct Tree {
     sites: Vec<Site>,
     warnings: Vec<String>,
     ignored: BTreeSet<String>,
+    /// The floating hand's body, held fixed at the reference frame.
+    mount: Option<String>,
 }
 
 impl Tree {
@@ -655,6 +657,13 @@ impl Ctx<'_> {
                 // reference frame; one without is an object of the scene (Menagerie's
                 // scene files hold one), which moves nothing of the hand.
                 "free" if top && moves_below(e) => {
+                    if let Some(first) = &t.mount {
+                        return Err(self.r.err(
+                            j,
+                            format!("a second floating hand (`{name}`, after `{first}`): only one free body with joints can be held fixed as the reference frame; fix the other hand in the file"),
+                        ));
+                    }
+                    t.mount = Some(name.clone());
                     t.warnings.push(format!(
                         "{}: {}: the free joint of `{name}` is held fixed; that body's frame is the reference frame of object_pose",
                         self.r.files[j.file],
@@ -884,6 +893,7 @@ impl Robot {
             sites: Vec::new(),
             warnings: Vec::new(),
             ignored,
+            mount: None,
         };
         let world = t.add_link("world".into(), 0);
         t.body_link.insert("world".into(), world);

@@ -132,6 +132,7 @@ fn malformed_mjcf_is_a_named_error() {
         ("<mujoco><worldbody>".to_string(), "well-formed"),
         (body("<joint type=\"ball\"/><body><joint type=\"ball\"/></body>"), "ball joint"),
         (body("<body><freejoint/></body>"), "free joint"),
+        ("<mujoco><worldbody><body name=\"l\"><freejoint/><body><joint/></body></body><body name=\"r\"><freejoint/><body><joint/></body></body></worldbody></mujoco>".to_string(), "a second floating hand (`r`, after `l`)"),
         (body("<joint axis=\"0 0 0\"/>"), "zero axis"),
         (body("<joint pos=\"1 nan 0\"/>"), "finite numbers"),
         (body("<joint type=\"spring\"/>"), "unknown joint type"),
