@@ -461,6 +461,11 @@ fn validate_transmission(t: &Transmission, m: usize) -> Result<(), ProblemError>
             format!("{} names", t.actuator_names.len()),
         ));
     }
+    // A batch of grasps of one hand shares its T: the last T that passed every check
+    // below on this thread passes again without them (each depends on T alone).
+    if FULL_RANK_TRANSMISSION.with(|c| c.borrow().get(&t.matrix, 0).is_some()) {
+        return Ok(());
+    }
     bounded_matrix("transmission", &t.matrix)?;
     // A moment arm below 1e-12 of the unit would put u beyond any force within the domain.
     for i in 0..m {
@@ -485,11 +490,6 @@ fn validate_transmission(t: &Transmission, m: usize) -> Result<(), ProblemError>
                 "all zeros",
             ));
         }
-    }
-    // A batch of grasps of one hand shares its T: the last T that passed on this
-    // thread passes again without its rank decision.
-    if FULL_RANK_TRANSMISSION.with(|c| c.borrow().get(&t.matrix, 0).is_some()) {
-        return Ok(());
     }
     // Columns at unit length: an actuator's gear or tendon radius is not a reason to
     // call it dependent.

@@ -231,6 +231,14 @@ fn dependent_actuators_are_refused_after_an_independent_t_of_the_same_shape() {
             with(&near).is_err(),
             "seed {seed}: a rank-deficient T within rounding"
         );
+        // Every other check of T still runs for a T other than the last that passed.
+        for (v, field) in [(f64::NAN, "transmission"), (1e-13, "transmission[0][0]")] {
+            let mut odd = good.clone();
+            odd[(0, 0)] = v;
+            with(&good).unwrap();
+            let e = with(&odd).expect_err("an entry out of range").to_string();
+            assert!(e.contains(field), "{e}");
+        }
     }
 }
 
