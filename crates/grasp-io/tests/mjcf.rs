@@ -221,19 +221,54 @@ fn unknown_elements_warn_once_and_degrees_are_the_default() {
 }
 
 /// Mutated and truncated MJCF loads or fails with a named error, never a panic; what
-/// loads also builds a hand problem or fails with a named error.
+/// loads also builds a hand problem or fails with a named error. Two bases: the test
+/// hand (tendons, couplings, every frame form) and Menagerie's Shadow hand (nested
+/// default classes, position actuators on tendons, autolimits).
 #[test]
 fn mutated_mjcf_never_panics() {
-    let base = std::fs::read_to_string(repo("fixtures/mjcf/test/tendon_finger.xml")).unwrap();
+    mutate(
+        "fixtures/mjcf/test/tendon_finger.xml",
+        serde_json::json!([
+            {"site": "f1_tip_site", "model": "pcwf", "mu": 0.5},
+            {"site": "th_tip_site", "model": "pcwf", "mu": 0.5}
+        ]),
+        &[
+            "<equality><joint joint1=\"f2_mid\" joint2=\"f2_flex\"/></equality>",
+            "tendon=\"f1_curl\"",
+        ],
+        12345,
+    );
+    mutate(
+        "fixtures/mjcf/menagerie/shadow_right.xml",
+        serde_json::json!([
+            {"link": "rh_ffdistal", "position": [0, -0.01, 0.02], "normal": [0, -1, 0],
+             "frame": "link", "model": "sfcl", "mu": 0.5, "mu_torsion": 0.005},
+            {"link": "rh_thdistal", "position": [0, -0.01, 0.02], "normal": [0, -1, 0],
+             "frame": "link", "model": "pcwf", "mu": 0.5}
+        ]),
+        &[
+            "<compiler autolimits=\"false\"/>",
+            "forcelimited=\"true\"",
+            "limited=\"true\"",
+            "childclass=\"nope\"",
+            "<plugin joint=\"rh_FFJ3\" forcerange=\"-1 2\"/>",
+            "<freejoint/>",
+        ],
+        67890,
+    );
+}
+
+fn mutate(base: &str, contacts: serde_json::Value, extra: &[&str], seed: u64) {
+    let base = std::fs::read_to_string(repo(base)).unwrap();
     let bytes = base.as_bytes();
-    let mut state = 12345u64;
+    let mut state = seed;
     let mut next = move || {
         state = state
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
-    let pieces: [&str; 14] = [
+    let mut pieces = vec![
         "<",
         ">",
         "\"",
@@ -242,13 +277,19 @@ fn mutated_mjcf_never_panics() {
         "0 0 0",
         "<joint type=\"ball\"/>",
         "</body>",
-        "<equality><joint joint1=\"f2_mid\" joint2=\"f2_flex\"/></equality>",
         "class=\"nope\"",
-        "tendon=\"f1_curl\"",
         "gear=\"0\"",
         "&amp;",
         "\u{0}",
     ];
+    pieces.extend_from_slice(extra);
+    let file: HandFile = serde_json::from_value(serde_json::json!({
+        "hand": {"model": "mutated.xml"},
+        "contacts": contacts,
+        "wrench": [0, 0, -1, 0, 0, 0],
+        "torque_limits": "model"
+    }))
+    .unwrap();
     let (mut ok, mut rejected) = (0, 0);
     for _ in 0..600 {
         let mut text = bytes.to_vec();
@@ -270,16 +311,6 @@ fn mutated_mjcf_never_panics() {
         match Robot::parse_mjcf(&text, "mutated.xml", None) {
             Ok(robot) => {
                 ok += 1;
-                let file: HandFile = serde_json::from_value(serde_json::json!({
-                    "hand": {"model": "mutated.xml"},
-                    "contacts": [
-                        {"site": "f1_tip_site", "model": "pcwf", "mu": 0.5},
-                        {"site": "th_tip_site", "model": "pcwf", "mu": 0.5}
-                    ],
-                    "wrench": [0, 0, -1, 0, 0, 0],
-                    "torque_limits": "model"
-                }))
-                .unwrap();
                 if let Ok(h) = file.build(&robot) {
                     let _ = grasp_core::GraspModel::new(&h.problem, &Default::default());
                 }
