@@ -252,10 +252,10 @@ struct Defaults {
     attrs: HashMap<(String, &'static str), Vec<(String, String)>>,
 }
 
-/// Actuators whose force statics can hold: its moment arms on the joints are the
-/// gear, and only its `forcerange` (or, with a fixed gain and no bias, its
-/// `ctrlrange`) bounds it. A `plugin` actuator's force is the plugin's (a PID
-/// controller, say): only its `forcerange` bounds it.
+/// The actuators statics reads: each one's moment arms on the joints are its gear
+/// (times a tendon's coefficients), and its `forcerange` bounds its force (or, with a
+/// fixed gain and no bias, its `ctrlrange`). A `plugin` actuator's force is the
+/// plugin's (a PID controller, say): only its `forcerange` bounds it.
 const ACTUATORS: [&str; 7] = [
     "motor",
     "general",
