@@ -62,6 +62,10 @@ HANDS = [
      ["body:ff_tip", "body:mf_tip", "body:rf_tip", "body:th_tip", "body:ff_medial"], 12),
     ("menagerie-leap", "fixtures/mjcf/menagerie/leap_right.xml",
      ["body:if_ds", "body:mf_ds", "body:rf_ds", "body:th_ds", "body:th_px"], 13),
+    # Slide fingers coupled by a joint equality, driven through a tendon by a biased
+    # general actuator.
+    ("menagerie-panda", "fixtures/mjcf/menagerie/panda_hand.xml",
+     ["body:left_finger", "body:right_finger", "body:hand"], 15),
     # PID plugin actuators, bodies named with slashes, a site on the world body.
     ("menagerie-dexee", "fixtures/mjcf/menagerie/shadow_dexee.xml",
      ["F0/fingertip_site", "F1/fingertip_site", "F2/fingertip_site", "F0/distal_site",

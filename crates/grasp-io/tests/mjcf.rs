@@ -23,6 +23,7 @@ fn jacobians_and_transmissions_match_mujoco() {
         "menagerie-allegro",
         "menagerie-leap",
         "menagerie-dexee",
+        "menagerie-panda",
     ] {
         let dir = repo("fixtures/mjcf/oracle");
         let text = std::fs::read_to_string(dir.join(format!("{name}.json"))).unwrap();
