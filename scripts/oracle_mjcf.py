@@ -40,6 +40,8 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "fixtures", "mjcf", "oracle")
 CASES = 60
+RANDOM = "fixtures/mjcf/random"
+RANDOM_CASES = 20
 
 HANDS = [
     ("shadow", "fixtures/mjcf/shadow_hand/shadow_hand.xml",
@@ -186,7 +188,11 @@ def sites_of(m, names):
 
 def main():
     os.makedirs(OUT, exist_ok=True)
-    for name, path, tips, seed in HANDS:
+    # The random hands of scripts/random_mjcf.py: fewer configurations each.
+    randoms = sorted(f for f in os.listdir(os.path.join(ROOT, RANDOM)) if f.endswith(".xml"))
+    hands = [(name, path, tips, seed, CASES) for name, path, tips, seed in HANDS]
+    hands += [(f[:-4], f"{RANDOM}/{f}", None, 100 + i, RANDOM_CASES) for i, f in enumerate(randoms)]
+    for name, path, tips, seed, count in hands:
         m = mujoco.MjModel.from_xml_string(expand(path))
         d = mujoco.MjData(m)
         rng = np.random.default_rng(seed)
@@ -195,7 +201,7 @@ def main():
         jname = lambda j: mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j)
         tips = sites_of(m, tips)
         cases = []
-        for case in range(CASES):
+        for case in range(count):
             q = {}
             for j in independent:
                 lo, hi = (m.jnt_range[j] if m.jnt_limited[j] else (-1.0, 1.0))
@@ -277,6 +283,12 @@ def main():
                     v = mult * moment[a, dof]
                     if v != 0.0:
                         tr[jname(lead)][an] = tr[jname(lead)].get(an, 0.0) + v
+            # A moment arm that cancels (an actuator on a tendon an equality holds at
+            # fixed length) is none: such an actuator moves no independent joint.
+            big = np.abs(moment).max() if moment.size else 0.0
+            for row in tr.values():
+                for an in [an for an, v in row.items() if abs(v) <= 1e-12 * big]:
+                    del row[an]
             problem = {
                 "name": f"{name} case {case}",
                 "hand": {

@@ -389,21 +389,34 @@ impl HandFile {
                 chain,
             });
         }
-        // Actuator moment arms on the independent joints (τ_ind = Pᵀ τ_full).
+        // Actuator moment arms on the independent joints (τ_ind = Pᵀ τ_full). An arm
+        // whose terms cancel to within their rounding is 0: an actuator on a tendon
+        // that an equality holds at fixed length, say, moves no independent joint
+        // (the coupling's multiplier is the ratio of the tendon's coefficients).
         let arms: Vec<Vec<(usize, f64)>> = robot
             .actuators
             .iter()
             .map(|a| {
-                let mut v: Vec<(usize, f64)> = Vec::new();
+                // (independent joint, arm, Σ|terms|, terms)
+                let mut v: Vec<(usize, f64, f64, usize)> = Vec::new();
                 for &(j, m) in &a.moment {
                     let cp = robot.coupling[j].expect("actuators drive moving joints");
-                    match v.iter_mut().find(|(k, _)| *k == cp.independent) {
-                        Some(e) => e.1 += cp.multiplier * m,
-                        None => v.push((cp.independent, cp.multiplier * m)),
+                    let term = cp.multiplier * m;
+                    match v.iter_mut().find(|e| e.0 == cp.independent) {
+                        Some(e) => {
+                            e.1 += term;
+                            e.2 += term.abs();
+                            e.3 += 1;
+                        }
+                        None => v.push((cp.independent, term, term.abs(), 1)),
                     }
                 }
-                v.retain(|&(_, m)| m != 0.0);
-                v
+                v.into_iter()
+                    .filter(|&(_, arm, size, terms)| {
+                        arm.abs() > 2.0 * terms as f64 * f64::EPSILON * size
+                    })
+                    .map(|(k, arm, ..)| (k, arm))
+                    .collect()
             })
             .collect();
         // An actuator that drives a contact's joint also loads its other joints, which
