@@ -24,7 +24,7 @@ import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "fixtures", "mjcf", "random")
-MODELS = 8
+MODELS = int(os.environ.get("RANDOM_MODELS", 8))
 
 
 def fmt(v):
@@ -36,6 +36,8 @@ class Hand:
         self.rng = rng
         self.degrees = bool(rng.integers(2))
         self.seq = str(rng.choice(["xyz", "zyx", "XYZ", "xzy", "ZYX", "yxz"]))
+        # Without autolimits, every range says whether it limits.
+        self.autolimits = bool(rng.random() < 0.7)
         self.joints = []  # (name, finger, kind)
         self.sites = []
         self.tips = []
@@ -64,6 +66,13 @@ class Hand:
     def frame(self, scale=0.04):
         return f' pos="{fmt(self.rng.uniform(-scale, scale, 3))}"' + self.orientation()
 
+    def flag(self, prefix):
+        """An explicit `{prefix}limited`: always without autolimits, sometimes with."""
+        rng = self.rng
+        if not self.autolimits or rng.random() < 0.2:
+            return f' {prefix}limited="{"true" if rng.random() < 0.7 else "false"}"'
+        return ""
+
     def joint(self, finger, k, cls):
         rng = self.rng
         name = f"f{finger}_j{k}"
@@ -86,7 +95,7 @@ class Hand:
                 lo, hi = 0.02 * lo, 0.02 * hi
             else:
                 lo, hi = self.angle(lo), self.angle(hi)
-            attrs += f' range="{lo:.6g} {hi:.6g}"'
+            attrs += f' range="{lo:.6g} {hi:.6g}"' + self.flag("")
         self.joints.append((name, finger, kind))
         return f"<joint {attrs}/>"
 
@@ -103,7 +112,11 @@ class Hand:
                 out.append(self.joint(f, k, "distal" if d > 0 and cls else None))
                 k += 1
         site = f"f{f}_tip"
-        out.append(f'<site name="{site}"{self.frame(0.02)}/>')
+        if rng.random() < 0.2:
+            ends = fmt(rng.uniform(-0.02, 0.02, 6))
+            out.append(f'<site name="{site}" type="capsule" size="0.004" fromto="{ends}"/>')
+        else:
+            out.append(f'<site name="{site}"{self.frame(0.02)}/>')
         self.sites.append(site)
         out.extend(["</body>"] * depth)
         if rng.random() < 0.3:
@@ -113,13 +126,15 @@ class Hand:
     def model(self, fingers):
         rng = self.rng
         lines = [f'<mujoco model="random">',
-                 f'  <compiler angle="{"degree" if self.degrees else "radian"}" eulerseq="{self.seq}"/>']
+                 f'  <compiler angle="{"degree" if self.degrees else "radian"}" eulerseq="{self.seq}" '
+                 f'autolimits="{"true" if self.autolimits else "false"}"/>']
         # Defaults: a root class, a finger class, a nested distal class.
         lines += ["  <default>",
                   f'    <joint axis="{fmt(rng.normal(size=3))}"/>',
                   '    <default class="finger">',
                   f'      <joint axis="{fmt(rng.normal(size=3))}" ref="{self.angle(rng.uniform(-0.3, 0.3)):.6g}"/>',
-                  f'      <motor gear="{rng.uniform(0.5, 3):.6g}" forcerange="-{rng.uniform(1, 5):.6g} {rng.uniform(1, 5):.6g}"/>',
+                  f'      <motor gear="{rng.uniform(0.5, 3):.6g}" forcerange="-{rng.uniform(1, 5):.6g} {rng.uniform(1, 5):.6g}"'
+                  + (' forcelimited="true"' if not self.autolimits else "") + "/>",
                   '      <default class="distal">',
                   f'        <joint axis="{fmt(rng.normal(size=3))}" pos="{fmt(rng.uniform(-0.005, 0.005, 3))}"/>',
                   "      </default>",
@@ -173,7 +188,7 @@ class Hand:
         rng.shuffle(targets)
         n = max(1, len(targets) - int(rng.integers(0, 3)))
         for i, (kind, name) in enumerate(targets[:n]):
-            a = str(rng.choice(["motor", "position", "general"]))
+            a = str(rng.choice(["motor", "position", "general", "velocity", "intvelocity", "cylinder"]))
             attrs = f'name="a{i}" {kind}="{name}"'
             if rng.random() < 0.5:
                 attrs += ' class="finger"' if a == "motor" else ""
@@ -181,13 +196,17 @@ class Hand:
                 attrs += f' gear="{rng.uniform(0.2, 4) * (1 if rng.random() < 0.8 else -1):.6g}"'
             r = rng.random()
             if r < 0.3:
-                attrs += f' forcerange="-{rng.uniform(0.5, 5):.6g} {rng.uniform(0.5, 5):.6g}"'
+                attrs += f' forcerange="-{rng.uniform(0.5, 5):.6g} {rng.uniform(0.5, 5):.6g}"' + self.flag("force")
             elif r < 0.6:
-                attrs += f' ctrlrange="-{rng.uniform(0.5, 2):.6g} {rng.uniform(0.5, 2):.6g}"'
+                attrs += f' ctrlrange="-{rng.uniform(0.5, 2):.6g} {rng.uniform(0.5, 2):.6g}"' + self.flag("ctrl")
             if a == "general" and rng.random() < 0.5:
                 attrs += f' gainprm="{rng.uniform(0.5, 3):.6g}"'
+                if rng.random() < 0.3:
+                    attrs += f' biastype="affine" biasprm="0 -{rng.uniform(1, 5):.6g} 0"'
             if a == "position":
                 attrs += f' kp="{rng.uniform(1, 10):.6g}"'
+            if a == "intvelocity":
+                attrs += f' actrange="-1 1"'
             acts.append(f"    <{a} {attrs}/>")
         lines += ["  <actuator>"] + acts + ["  </actuator>", "</mujoco>"]
         return "\n".join(lines) + "\n"
