@@ -38,6 +38,8 @@ import pinocchio as pin
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "fixtures", "urdf", "oracle")
 CASES = 60
+RANDOM = "fixtures/urdf/random"
+RANDOM_CASES = 20
 
 HANDS = [
     ("allegro", "fixtures/urdf/allegro/allegro_hand_right.urdf", True,
@@ -101,7 +103,17 @@ def random_quaternion(rng):
 
 def main():
     os.makedirs(OUT, exist_ok=True)
-    for name, rel, use_mimic, tips, seed in HANDS:
+    # The random hands of scripts/random_urdf.py, their leaf links as contacts, fewer
+    # configurations each, coupled here (Pinocchio couples one level of mimic only).
+    hands = [h + (CASES,) for h in HANDS]
+    rdir = os.path.join(ROOT, RANDOM)
+    for i, f in enumerate(sorted(x for x in os.listdir(rdir) if x.endswith(".urdf"))):
+        root = ET.parse(os.path.join(rdir, f)).getroot()
+        parents = {j.find("parent").get("link") for j in root.iter("joint")}
+        leaves = [j.find("child").get("link") for j in root.iter("joint")
+                  if j.find("child").get("link") not in parents]
+        hands.append((f[:-5], f"{RANDOM}/{f}", False, leaves, 100 + i, RANDOM_CASES))
+    for name, rel, use_mimic, tips, seed, count in hands:
         rng = np.random.default_rng(seed)
         path = os.path.join(ROOT, rel)
         model = pin.buildModelFromUrdf(path, mimic=use_mimic)
@@ -122,7 +134,7 @@ def main():
                 col[model.names[i]] = jm.idx_v
         cases = []
         attempts = 0
-        while len(cases) < CASES:
+        while len(cases) < count:
             attempts += 1
             q_ind = {j: sample(rng, *limits[j], kinds[j]) for j in independent}
             # Some joints are left out of the file: they sit at 0.

@@ -23,19 +23,38 @@ const ROBOTS: [&str; 3] = [
 
 #[test]
 fn jacobians_match_pinocchio() {
-    for name in [
+    let dir = repo("fixtures/urdf/oracle");
+    // The random hands of scripts/random_urdf.py, all of them.
+    let mut randoms: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|f| f.starts_with("random-") && f.ends_with(".json"))
+        .map(|f| f.trim_end_matches(".json").to_string())
+        .collect();
+    randoms.sort();
+    assert!(randoms.len() >= 6, "{randoms:?}");
+    let named = [
         "allegro",
         "ability",
         "linkage-gripper",
         "leap",
         "shadow-urdf",
         "barrett",
-    ] {
-        let dir = repo("fixtures/urdf/oracle");
+    ];
+    for name in named
+        .iter()
+        .copied()
+        .chain(randoms.iter().map(String::as_str))
+    {
         let text = std::fs::read_to_string(dir.join(format!("{name}.json"))).unwrap();
         let oracle: serde_json::Value = serde_json::from_str(&text).unwrap();
         let cases = oracle["cases"].as_array().unwrap();
-        assert!(cases.len() >= 50, "{name}: {} configurations", cases.len());
+        let least = if name.starts_with("random-") { 20 } else { 50 };
+        assert!(
+            cases.len() >= least,
+            "{name}: {} configurations",
+            cases.len()
+        );
         let mut worst: f64 = 0.0;
         for case in cases {
             let file: HandFile = serde_json::from_value(case["problem"].clone()).unwrap();
