@@ -598,6 +598,34 @@ class Hand:
                 )
         return q, arrays["positions"], arrays["normals"], object_pose
 
+    def frames(self, joint_positions, names: Sequence[str]):
+        """Where sites and links are: ``(positions, rotations)`` of the frames ``names``
+        (MJCF sites, or links) at each configuration, in the model's root frame (a
+        URDF's root link, an MJCF's world; ``object_pose`` is given in it).
+
+        ``joint_positions`` is ``[B, len(joint_names)]`` (or one configuration,
+        ``[len(joint_names)]``); ``positions`` is then ``[B, k, 3]`` and ``rotations``
+        ``[B, k, 3, 3]``, whose columns are the frame's x, y and z axes (a site's z axis
+        is a site contact's default normal), without the leading ``B`` for one
+        configuration. A planner places the object and the contact points from them:
+        the fingertip sites' centroid as the object's origin, say.
+        """
+        q = _real("joint_positions", joint_positions)
+        single = q.ndim == 1
+        if single:
+            q = q[None, :]
+        if q.ndim != 2:
+            raise ValueError(
+                f"joint_positions: expected shape (B, {len(self.joint_names)}) or ({len(self.joint_names)},), got {q.shape}"
+            )
+        if isinstance(names, str):
+            raise ValueError("names: expected a sequence of link or site names, got a string")
+        names = [str(n) for n in names]
+        P = np.empty((q.shape[0], len(names), 3))
+        R = np.empty((q.shape[0], len(names), 3, 3))
+        self._native.frames(q, names, P, R)
+        return (P[0], R[0]) if single else (P, R)
+
     def arrays(
         self, joint_positions, contacts: Sequence[Mapping], *, positions=None, normals=None, object_pose=None
     ) -> HandArrays:

@@ -1045,6 +1045,69 @@ impl Hand {
         }))
     }
 
+    /// Where the frames `names` (MJCF sites, or links) are at each row of `q`, in the
+    /// model's root frame: origins into `pos[b, i]`, rotation matrices (columns: the
+    /// frame's x, y, z axes) into `rot[b, i]`.
+    fn frames(
+        &self,
+        py: Python<'_>,
+        q: PyReadonlyArray2<'_, f64>,
+        names: Vec<String>,
+        mut pos: PyReadwriteArrayDyn<'_, f64>,
+        mut rot: PyReadwriteArrayDyn<'_, f64>,
+    ) -> PyResult<()> {
+        let r = &self.robot;
+        let q = q.as_array();
+        let (b, k) = (q.nrows(), names.len());
+        joint_columns(&q, r.independent.len())?;
+        let mut needed = vec![false; r.links.len()];
+        let frames = names
+            .iter()
+            .enumerate()
+            .map(|(i, name)| {
+                let f = r.named_frame(name, &format!("names[{i}]"));
+                if let Ok((link, _)) = f {
+                    r.mark_ancestors(link, &mut needed);
+                }
+                f
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(invalid)?;
+        if let Some(((row, col), v)) = q
+            .indexed_iter()
+            .find(|(_, v)| !v.is_finite() || v.abs() > grasp_torque::problem::MAX_MAGNITUDE)
+        {
+            return Err(invalid(format!(
+                "joint_positions[{row}][{col}] ({}): expected a finite position of magnitude at most 1e12, got {v}",
+                r.joints[r.independent[col]].name
+            )));
+        }
+        let pos = contiguous_out("positions", &mut pos, &[b, k, 3])?;
+        let rot = contiguous_out("rotations", &mut rot, &[b, k, 3, 3])?;
+        py.detach(|| {
+            let mut qb = vec![0.0; q.ncols()];
+            for (row, (pb, rb)) in pos
+                .chunks_exact_mut(3 * k)
+                .zip(rot.chunks_exact_mut(9 * k))
+                .enumerate()
+            {
+                qb.iter_mut().zip(q.row(row)).for_each(|(a, &v)| *a = v);
+                let pose = r.pose_of(&qb, &needed);
+                for (i, &(link, offset)) in frames.iter().enumerate() {
+                    let x = pose.links[link] * offset;
+                    pb[3 * i..3 * i + 3].copy_from_slice(x.translation.vector.as_slice());
+                    let m = x.rotation.to_rotation_matrix();
+                    for (a, row3) in rb[9 * i..9 * i + 9].chunks_exact_mut(3).enumerate() {
+                        for (c, e) in row3.iter_mut().enumerate() {
+                            *e = m[(a, c)];
+                        }
+                    }
+                }
+            }
+        });
+        Ok(())
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "Hand({:?}: {}, {} joints)",
@@ -1053,6 +1116,17 @@ impl Hand {
             self.robot.independent.len()
         )
     }
+}
+
+/// `q` has one column per independent joint of the hand.
+fn joint_columns(q: &ArrayView2<'_, f64>, joints: usize) -> PyResult<()> {
+    if q.ncols() != joints {
+        return Err(invalid(format!(
+            "joint_positions: expected shape (B, {joints}), one column per joint of Hand.joint_names, got {:?}",
+            q.shape()
+        )));
+    }
+    Ok(())
 }
 
 /// A hand's batch: grasp b posed from row b of the caller's arrays.
@@ -1077,14 +1151,8 @@ impl<'a> Posed<'a> {
         poses: &'a Option<PyReadonlyArray2<'_, f64>>,
     ) -> PyResult<Self> {
         let q = q.as_array();
-        let (b, nq) = q.dim();
-        let joints = grasps.robot().independent.len();
-        if nq != joints {
-            return Err(invalid(format!(
-                "joint_positions: expected shape (B, {joints}), one column per joint of Hand.joint_names, got {:?}",
-                q.shape()
-            )));
-        }
+        let b = q.nrows();
+        joint_columns(&q, grasps.robot().independent.len())?;
         let n = grasps.template().contacts.len();
         let (positions, normals) = (
             positions.as_ref().map(|a| a.as_array()),

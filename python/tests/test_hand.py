@@ -204,3 +204,64 @@ def test_arrays_are_the_hand_forms_matrices_and_solve_as_the_hand_batch(name):
     np.testing.assert_array_equal(via.status, direct.status)
     np.testing.assert_array_equal(via.objective, direct.objective)
     np.testing.assert_array_equal(via.torque, direct.torque)
+
+
+def contact_frame(n):
+    """(t1, t2, n) of docs/geometry.md."""
+    a0 = np.array([0.0, 1.0, 0.0]) if abs(n[0]) >= 0.9 else np.array([1.0, 0.0, 0.0])
+    t1 = np.cross(n, a0)
+    t1 /= np.linalg.norm(t1)
+    return t1, np.cross(n, t1), n
+
+
+@pytest.mark.parametrize("name", ["shadow-tripod", "allegro-pinch"])
+def test_frames_place_the_contacts_as_the_hand_batch_does(name):
+    # G of a grasp with the object frame at the root frame, from Hand.arrays, against G
+    # built from Hand.frames: a site contact at the site's origin along its z axis, a
+    # link contact at its link-frame position and normal moved by the link's frame.
+    d, hand, q0 = fixture(name)
+    rng = np.random.default_rng(3)
+    q = q0 + rng.normal(0, 0.1, (8, len(q0)))
+    contacts = [{k: v for k, v in c.items() if k not in ("position", "normal", "frame")}
+                for c in d["contacts"]]
+    offsets = rng.normal(0, 0.005, (len(contacts), 3))
+    normals = rng.normal(size=(len(contacts), 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    for c, o, n in zip(contacts, offsets, normals):
+        if "link" in c:
+            c.update(frame="link", position=o.tolist(), normal=n.tolist())
+    names = [c.get("site", c.get("link")) for c in contacts]
+    P, R = hand.frames(q, names)
+    assert P.shape == (8, len(names), 3) and R.shape == (8, len(names), 3, 3)
+    assert np.allclose(np.einsum("bkij,bkil->bkjl", R, R), np.eye(3), atol=1e-14)
+    G = hand.arrays(q, contacts).G
+    for b in range(8):
+        cols = []
+        for i, c in enumerate(contacts):
+            if "site" in c:
+                p, n = P[b, i], R[b, i][:, 2]
+            else:
+                p, n = P[b, i] + R[b, i] @ offsets[i], R[b, i] @ normals[i]
+            dirs = [n] if c["model"] == "fpc" else list(contact_frame(n))
+            cols += [np.concatenate([v, np.cross(p, v)]) for v in dirs]
+            if c["model"] in ("sfcl", "sfce"):
+                cols.append(np.concatenate([np.zeros(3), n]))
+        assert np.abs(np.array(cols).T - G[b]).max() <= 1e-14 * max(1.0, np.abs(G[b]).max())
+    # One configuration gives one set of frames.
+    P1, R1 = hand.frames(q[0], names)
+    assert np.array_equal(P1, P[0]) and np.array_equal(R1, R[0])
+
+
+def test_frames_name_what_is_wrong():
+    _, hand, q = fixture("shadow-tripod")
+    site = hand.sites[0]
+    with pytest.raises(ValueError, match=r"names\[1\]: expected a link or site of .*\(nearest: `"):
+        hand.frames(q, [site, site + "x"])
+    bad = q.copy()
+    bad[2] = np.nan
+    with pytest.raises(ValueError, match=r"joint_positions\[0\]\[2\] \(.*\): expected a finite position"):
+        hand.frames(bad, [site])
+    with pytest.raises(ValueError, match=r"joint_positions: expected shape"):
+        hand.frames(np.zeros((2, len(q) + 1)), [site])
+    with pytest.raises(ValueError, match="names: expected a sequence"):
+        hand.frames(q, site)

@@ -368,12 +368,9 @@ impl HandFile {
                     ))
                 }
             };
-            let full_chain = robot.chain(link);
-            needed[link] = true;
-            for &j in &full_chain {
-                needed[robot.joints[j].parent] = true;
-            }
-            let chain: Vec<usize> = full_chain
+            robot.mark_ancestors(link, &mut needed);
+            let chain: Vec<usize> = robot
+                .chain(link)
                 .into_iter()
                 .filter(|&j| robot.joints[j].kind != JointKind::Fixed)
                 .collect();

@@ -849,6 +849,40 @@ impl Robot {
         chain
     }
 
+    /// The frame called `name`: an MJCF site's, else a link's, as the link it is on and
+    /// its placement in that link's frame (the identity for a link). `field` names the
+    /// caller's argument in the error, which lists the nearest names.
+    pub fn named_frame(
+        &self,
+        name: &str,
+        field: &str,
+    ) -> Result<(usize, Isometry3<f64>), ProblemError> {
+        if let Some(s) = self.sites.iter().find(|s| s.name == name) {
+            return Ok((s.link, s.frame));
+        }
+        let link = self.link(name).ok_or_else(|| {
+            let names = self.links.iter().chain(self.sites.iter().map(|s| &s.name));
+            ProblemError::invalid(
+                field,
+                format!(
+                    "a link or site of {} ({})",
+                    self.source,
+                    nearest(name, names.map(String::as_str))
+                ),
+                format!("`{name}`"),
+            )
+        })?;
+        Ok((link, Isometry3::identity()))
+    }
+
+    /// Marks `link` and every link above it (what [`Robot::pose_of`] needs to place it).
+    pub fn mark_ancestors(&self, link: usize, needed: &mut [bool]) {
+        needed[link] = true;
+        for j in self.chain(link) {
+            needed[self.joints[j].parent] = true;
+        }
+    }
+
     /// The links no joint has as parent: the ends of the chains.
     pub fn leaves(&self) -> Vec<usize> {
         let mut has_child = vec![false; self.links.len()];
