@@ -13,6 +13,8 @@ writes per configuration:
 - `transmission`: T by joint and actuator name, from `data.actuator_moment` after
   `mj_forward`, reduced the same way (`T = Pᵀ T_full`);
 - `grasp_matrix`: the expected G;
+- `frames` (the first five configurations): every site's and body's frame in the world
+  (`site_xpos`/`site_xmat`, `xpos`/`xmat`), for `Robot::named_frame` and the poses;
 
 and per hand `actuator_limits`, the bound on each actuator's force that
 `"torque_limits": "model"` must give, from MuJoCo's compiled ranges.
@@ -40,6 +42,8 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "fixtures", "mjcf", "oracle")
 CASES = 60
+# Configurations whose site and body frames are written too.
+FRAME_CASES = 5
 RANDOM = "fixtures/mjcf/random"
 RANDOM_CASES = 20
 
@@ -301,12 +305,24 @@ def main():
                 "wrench": [0, 0, -0.5, 0, 0, 0],
                 "torque_limits": "model",
             }
-            cases.append({
+            case_out = {
                 "problem": problem,
                 "jacobian_transpose": jt,
                 "transmission": tr,
                 "grasp_matrix": np.array(gcols).T.tolist(),
-            })
+            }
+            if case < FRAME_CASES:
+                # Every site's and body's frame in the world: position, then the
+                # rotation matrix row by row (MuJoCo's site_xmat, xmat).
+                frames = {}
+                for sid in range(m.nsite):
+                    frames[mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_SITE, sid)] = (
+                        list(d.site_xpos[sid]) + list(d.site_xmat[sid]))
+                for bid in range(1, m.nbody):
+                    frames.setdefault(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, bid),
+                                      list(d.xpos[bid]) + list(d.xmat[bid]))
+                case_out["frames"] = frames
+            cases.append(case_out)
         out = {"model": path, "mujoco": mujoco.__version__,
                "actuator_limits": actuator_limits(m), "cases": cases}
         with open(os.path.join(OUT, f"{name}.json"), "w") as f:
