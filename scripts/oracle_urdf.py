@@ -10,6 +10,8 @@ fingertip contacts pushing toward their common centre, and writes, per configura
   Pinocchio's frame Jacobian (LOCAL_WORLD_ALIGNED, at the contact point) and the
   contact frame convention of docs/geometry.md;
 - `grasp_matrix`: the expected G;
+- `frames` (the first five configurations): every link's frame, from Pinocchio's body
+  frames;
 
 and per hand `effort_limits`, Pinocchio's effort limit of each independent joint, which
 `"torque_limits": "model"` must give.
@@ -38,6 +40,8 @@ import pinocchio as pin
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "fixtures", "urdf", "oracle")
 CASES = 60
+# Configurations whose link frames are written too.
+FRAME_CASES = 5
 RANDOM = "fixtures/urdf/random"
 RANDOM_CASES = 20
 
@@ -226,12 +230,20 @@ def main():
                 "wrench": (np.concatenate([R.T @ [0, 0, weight], np.zeros(3)])).tolist(),
                 "torque_limits": "model",
             }
-            cases.append({
+            case_out = {
                 "problem": problem,
                 "defaulted_joints": sorted(omitted),
                 "grasp_matrix": np.array(g_cols).T.tolist(),
                 "jacobian_transpose": jt,
-            })
+            }
+            if len(cases) < FRAME_CASES:
+                # Every link's frame in the root link's: position, then the rotation
+                # matrix row by row (Pinocchio's body frames).
+                case_out["frames"] = {
+                    f.name: list(data0.oMf[i].translation) + list(data0.oMf[i].rotation.flatten())
+                    for i, f in enumerate(model.frames) if f.type == pin.FrameType.BODY
+                }
+            cases.append(case_out)
         # `"torque_limits": "model"`: Pinocchio's effort limit of each independent
         # joint (none when the URDF gives no positive effort).
         efforts = {}

@@ -56,7 +56,36 @@ fn jacobians_match_pinocchio() {
             cases.len()
         );
         let mut worst: f64 = 0.0;
+        let mut worst_f: f64 = 0.0;
+        let model = cases[0]["problem"]["hand"]["model"].as_str().unwrap();
+        let robot = Robot::load(&dir.join(model)).unwrap();
         for case in cases {
+            // Every link's frame where Pinocchio puts it (the first cases).
+            if let Some(frames) = case["frames"].as_object() {
+                let mut q = vec![0.0; robot.independent.len()];
+                for (name, v) in case["problem"]["hand"]["joint_positions"]
+                    .as_object()
+                    .unwrap()
+                {
+                    let j = robot.joint(name).unwrap();
+                    q[robot.coupling[j].unwrap().independent] = v.as_f64().unwrap();
+                }
+                let pose = robot.pose(&q);
+                for (name, want) in frames {
+                    let want: Vec<f64> = serde_json::from_value(want.clone()).unwrap();
+                    let (link, offset) = robot.named_frame(name, "frames").unwrap();
+                    let x = pose.links[link] * offset;
+                    let r = x.rotation.to_rotation_matrix();
+                    let got = (0..3)
+                        .map(|i| x.translation.vector[i])
+                        .chain((0..9).map(|e| r[(e / 3, e % 3)]));
+                    let err = got
+                        .zip(&want)
+                        .fold(0.0f64, |a, (g, w)| a.max((g - w).abs()));
+                    worst_f = worst_f.max(err);
+                    assert!(err <= 1e-12, "{name}'s frame off by {err:e} in {model}");
+                }
+            }
             let file: HandFile = serde_json::from_value(case["problem"].clone()).unwrap();
             let built = file.into_problem(&dir).unwrap();
             let p = &built.problem;
@@ -118,7 +147,7 @@ fn jacobians_match_pinocchio() {
             }
         }
         eprintln!(
-            "{name}: {} configurations, worst Jᵀ error {worst:e} relative",
+            "{name}: {} configurations, worst Jᵀ error {worst:.1e} relative, frames {worst_f:.1e} (metres, rotation entries)",
             cases.len()
         );
     }
