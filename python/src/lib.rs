@@ -1073,12 +1073,13 @@ impl Hand {
             })
             .collect::<Result<Vec<_>, _>>()
             .map_err(invalid)?;
+        let most = grasp_torque::problem::MAX_MAGNITUDE;
         if let Some(((row, col), v)) = q
             .indexed_iter()
-            .find(|(_, v)| !v.is_finite() || v.abs() > grasp_torque::problem::MAX_MAGNITUDE)
+            .find(|(_, v)| !v.is_finite() || v.abs() > most)
         {
             return Err(invalid(format!(
-                "joint_positions[{row}][{col}] ({}): expected a finite position of magnitude at most 1e12, got {v}",
+                "joint_positions[{row}][{col}] ({}): expected a finite position of magnitude at most {most:e}, got {v}",
                 r.joints[r.independent[col]].name
             )));
         }
