@@ -20,8 +20,9 @@ and per hand `actuator_limits`, the bound on each actuator's force that
 `"torque_limits": "model"` must give, from MuJoCo's compiled ranges.
 
 MuJoCo needs every mesh a file names; the fixtures carry none. The script expands the
-includes itself, drops <asset>, <contact>, <sensor> and every <geom>, and bounds body
-masses (none of which changes kinematics or moment arms) before `from_xml_string`.
+includes itself, drops <asset>, <contact>, <sensor> and every <geom> but those a spatial
+tendon wraps (without their mesh and material), and bounds body masses (none of which
+changes kinematics or moment arms) before `from_xml_string`.
 
 Run from the repository root (mujoco 3.3 and numpy from PyPI):
 
@@ -76,11 +77,18 @@ HANDS = [
     ("menagerie-dexee", "fixtures/mjcf/menagerie/shadow_dexee.xml",
      ["F0/fingertip_site", "F1/fingertip_site", "F2/fingertip_site", "F0/distal_site",
       "body:F1/finger_middle"], 14),
+    # Tendon-driven: actuators on spatial tendons wrapped around cylinders with side
+    # sites, springs, joint equalities.
+    ("menagerie-aero", "fixtures/mjcf/menagerie/aero_right.xml",
+     ["if_tip", "mf_tip", "rf_tip", "pf_tip", "th_tip", "body:right_index_middle_link"], 16),
 ]
 
 
 def expand(path):
-    """The model as one XML tree: includes inlined, assets and geoms dropped."""
+    """The model as one XML tree: includes inlined, assets and geoms dropped but for
+    those a spatial tendon wraps."""
+    wrapped = set()
+
     def load(p):
         root = ET.parse(p).getroot()
         base = os.path.dirname(p)
@@ -91,7 +99,9 @@ def expand(path):
                 if c.tag == "include":
                     inc = load(os.path.join(base, c.get("file")))
                     out.extend(list(inc))
-                elif c.tag in ("asset", "contact", "sensor", "geom", "keyframe"):
+                elif c.tag in ("asset", "contact", "sensor", "keyframe"):
+                    continue
+                elif c.tag == "geom" and el.tag not in ("spatial", "default") and c.get("name") not in wrapped:
                     continue
                 else:
                     walk(c)
@@ -99,8 +109,16 @@ def expand(path):
             for c in list(el):
                 el.remove(c)
             el.extend(out)
+        for g in root.iter("geom"):
+            for k in ("mesh", "material"):
+                g.attrib.pop(k, None)
+            if g.get("type") == "mesh":
+                del g.attrib["type"]
         walk(root)
         return root
+    # The geoms spatial tendons name, from a first pass over the files.
+    first = load(os.path.join(ROOT, path))
+    wrapped.update(g.get("geom") for sp in first.iter("spatial") for g in sp.iter("geom"))
     root = load(os.path.join(ROOT, path))
     root.tag = "mujoco"
     comp = root.find("compiler")

@@ -3,7 +3,7 @@
 use super::format::g;
 use super::Format;
 use anyhow::Result;
-use grasp_torque::urdf::{JointKind, Robot};
+use grasp_torque::urdf::{Drive, JointKind, Robot};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -71,13 +71,23 @@ pub(crate) fn run(args: &HandArgs) -> Result<u8> {
                     "independent_joints": dedup(c.iter().map(|&j| leader(j).0)),
                 })).collect::<Vec<_>>(),
                 "sites": robot.sites.iter().map(|s| json!({"name": s.name, "link": robot.links[s.link]})).collect::<Vec<_>>(),
-                "actuators": robot.actuators.iter().map(|a| json!({
-                    "name": a.name,
-                    "type": a.kind,
-                    "moment": a.moment.iter().map(|&(j, m)| (joint(j).name.clone(), m)).collect::<std::collections::BTreeMap<_, _>>(),
-                    "limit": limit(a.limit),
-                    "limit_source": a.limit_source,
-                })).collect::<Vec<_>>(),
+                "actuators": robot.actuators.iter().map(|a| {
+                    let mut v = json!({
+                        "name": a.name,
+                        "type": a.kind,
+                        "limit": limit(a.limit),
+                        "limit_source": a.limit_source,
+                    });
+                    match &a.drive {
+                        Drive::Fixed(moment) => v["moment"] = json!(moment.iter().map(|&(j, m)| (joint(j).name.clone(), m)).collect::<std::collections::BTreeMap<_, _>>()),
+                        Drive::Tendon { tendon, gear } => v["spatial_tendon"] = json!({
+                            "name": robot.tendons[*tendon].name,
+                            "gear": gear,
+                            "joints": robot.tendon_joints(*tendon).iter().map(|&j| &joint(j).name).collect::<Vec<_>>(),
+                        }),
+                    }
+                    v
+                }).collect::<Vec<_>>(),
                 "warnings": robot.warnings,
             });
             outln!("{}", serde_json::to_string_pretty(&v)?);
@@ -139,11 +149,25 @@ pub(crate) fn run(args: &HandArgs) -> Result<u8> {
                     .max()
                     .unwrap_or(0);
                 for a in &robot.actuators {
-                    let arms: Vec<String> = a
-                        .moment
-                        .iter()
-                        .map(|&(j, m)| format!("{}·{}", g(m, 6), joint(j).name))
-                        .collect();
+                    let arms: Vec<String> = match &a.drive {
+                        Drive::Fixed(moment) => moment
+                            .iter()
+                            .map(|&(j, m)| format!("{}·{}", g(m, 6), joint(j).name))
+                            .collect(),
+                        Drive::Tendon { tendon, gear } => {
+                            let joints: Vec<&str> = robot
+                                .tendon_joints(*tendon)
+                                .iter()
+                                .map(|&j| joint(j).name.as_str())
+                                .collect();
+                            vec![format!(
+                                "{}·spatial tendon `{}` (arms vary with the configuration; on {})",
+                                g(*gear, 6),
+                                robot.tendons[*tendon].name,
+                                joints.join(", ")
+                            )]
+                        }
+                    };
                     let lim = match a.limit {
                         Some(l) => {
                             format!("|u| ≤ {} ({:?})", g(l, 5), a.limit_source).to_lowercase()

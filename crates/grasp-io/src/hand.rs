@@ -10,7 +10,7 @@
 
 use crate::file::{ModelName, Options};
 use crate::geometry::{check_vec, contact_frame, UNIT_TOLERANCE};
-use crate::urdf::{nearest, JointKind, Robot};
+use crate::urdf::{nearest, Drive, JointKind, Pose, Robot};
 use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
 use grasp_core::matrix::Matrix;
@@ -389,14 +389,29 @@ impl HandFile {
         // Actuator moment arms on the independent joints (τ_ind = Pᵀ τ_full). An arm
         // whose terms cancel to within their rounding is 0: an actuator on a tendon
         // that an equality holds at fixed length, say, moves no independent joint
-        // (the coupling's multiplier is the ratio of the tendon's coefficients).
+        // (the coupling's multiplier is the ratio of the tendon's coefficients). A
+        // spatial tendon's arms depend on the configuration: here, the joints it can
+        // move (each pose computes the values).
         let arms: Vec<Vec<(usize, f64)>> = robot
             .actuators
             .iter()
             .map(|a| {
+                let moment = match &a.drive {
+                    Drive::Fixed(moment) => moment,
+                    Drive::Tendon { tendon, .. } => {
+                        let mut v: Vec<(usize, f64)> = robot
+                            .tendon_joints(*tendon)
+                            .into_iter()
+                            .map(|j| (robot.coupling[j].expect("moving").independent, 1.0))
+                            .collect();
+                        v.sort_unstable_by_key(|e| e.0);
+                        v.dedup_by_key(|e| e.0);
+                        return v;
+                    }
+                };
                 // (independent joint, arm, Σ|terms|, terms)
                 let mut v: Vec<(usize, f64, f64, usize)> = Vec::new();
-                for &(j, m) in &a.moment {
+                for &(j, m) in moment {
                     let cp = robot.coupling[j].expect("actuators drive moving joints");
                     let term = cp.multiplier * m;
                     match v.iter_mut().find(|e| e.0 == cp.independent) {
@@ -580,7 +595,19 @@ impl HandFile {
             .collect();
         moving.sort_unstable();
         moving.dedup();
-        Ok(HandGrasps {
+        // Spatial tendons: their columns of T, and the links their paths pass.
+        let mut tendon_columns = Vec::new();
+        for (c, &a) in columns.iter().enumerate() {
+            if let Drive::Tendon { tendon, gear } = robot.actuators[a].drive {
+                tendon_columns.push((c, tendon, gear));
+                for branch in robot.tendons[tendon].branches(robot) {
+                    for link in branch {
+                        robot.mark_ancestors(link, &mut needed);
+                    }
+                }
+            }
+        }
+        let mut grasps = HandGrasps {
             robot,
             contacts,
             needed,
@@ -596,7 +623,16 @@ impl HandFile {
             unlimited_joints,
             actuator_limits,
             warnings,
-        })
+            tendon_columns,
+        };
+        // The template's spatial tendon arms: at every joint's 0.
+        if !grasps.tendon_columns.is_empty() {
+            let frames = robot.pose_of(&vec![0.0; robot.independent.len()], &grasps.needed);
+            let mut template = grasps.template.clone();
+            grasps.tendon_arms(&frames, &mut template)?;
+            grasps.template = template;
+        }
+        Ok(grasps)
     }
 }
 
@@ -687,9 +723,39 @@ pub struct HandGrasps<'r> {
     actuator_limits: Vec<ActuatorLimit>,
     /// What the limits' source left unlimited.
     warnings: Vec<String>,
+    /// The columns of T that spatial tendons give: (column, tendon, gear).
+    tendon_columns: Vec<(usize, usize, f64)>,
 }
 
 impl HandGrasps<'_> {
+    /// Writes the spatial tendons' columns of `problem`'s T at `frames`: each gear
+    /// times the tendon's moment arms, reduced to the independent joints (`Pᵀ`).
+    fn tendon_arms(&self, frames: &Pose, problem: &mut GraspProblem) -> Result<(), ProblemError> {
+        let Some(t) = problem.transmission.as_mut() else {
+            return Ok(());
+        };
+        for &(c, tendon, gear) in &self.tendon_columns {
+            let (_, arms) = self.robot.tendon_moments(tendon, frames).map_err(|w| {
+                ProblemError::invalid(
+                    "joint_positions",
+                    format!(
+                        "a configuration where the side site of geom `{}` is outside it (tendon `{}`: a string inside its wrapping geom is not modelled)",
+                        w.geom, self.robot.tendons[tendon].name
+                    ),
+                    "the side site inside the geom",
+                )
+            })?;
+            for r in 0..t.matrix.nrows() {
+                t.matrix[(r, c)] = 0.0;
+            }
+            for (j, m) in arms {
+                let cp = self.robot.coupling[j].expect("moving");
+                t.matrix[(self.row_of[cp.independent], c)] += cp.multiplier * gear * m;
+            }
+        }
+        Ok(())
+    }
+
     /// The problem without its G and Jᵀ (zero columns): its joints, actuators,
     /// contact models and options, the same for every pose.
     pub fn template(&self) -> &GraspProblem {
@@ -889,6 +955,7 @@ impl HandGrasps<'_> {
             *v = flush_subnormal(*v);
         }
         let mut problem = self.template.clone();
+        self.tendon_arms(&frames, &mut problem)?;
         problem.grasp_matrix = g;
         problem.jacobian_transpose = jt;
         problem.validate()?;

@@ -9,6 +9,7 @@ pub mod file;
 pub mod geometry;
 pub mod hand;
 pub mod mjcf;
+pub mod tendon;
 pub mod urdf;
 
 pub use file::{

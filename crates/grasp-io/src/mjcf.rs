@@ -13,20 +13,24 @@
 //! - **Couplings:** `<equality><joint>` with a linear `polycoef`, and `<equality><tendon>`
 //!   on a fixed tendon of two joints, become mimic couplings (the later joint follows).
 //! - **Actuators:** `motor`, `general`, `position`, `velocity`, `intvelocity`,
-//!   `cylinder` and `plugin` on a `joint` or a fixed `tendon`: the moment arm is the
-//!   gear, times the tendon's coefficients. Gains and biases do not enter statics.
+//!   `cylinder` and `plugin` on a `joint`, a fixed `tendon` (the moment arm is the gear,
+//!   times the tendon's coefficients) or a spatial `tendon` (the gear times the
+//!   derivative of the tendon's length, which depends on the configuration: sites,
+//!   sphere and cylinder geoms wrapped as MuJoCo wraps them, pulleys; see
+//!   [`crate::tendon`]). Gains and biases do not enter statics.
 //!
 //! A `free` joint on a body directly under `<worldbody>` with joints below it (a
 //! floating hand) is held fixed, and that body's frame becomes the reference frame; a
 //! free body without (an object of the scene) stays where the file puts it; `<frame>` moves the
 //! bodies and sites it holds. `free` and `ball` joints inside the tree, `<composite>`,
 //! `<flexcomp>`, `<replicate>`, `<attach>` and `<equality><connect>` change the
-//! kinematics and are errors. Meshes,
-//! geoms, textures and assets are never opened; other elements are ignored, with one
+//! kinematics and are errors. Meshes, textures and assets are never opened, and a geom
+//! is read only when a spatial tendon an actuator pulls on wraps it; other elements are ignored, with one
 //! warning per element name.
 
+use crate::tendon::{PathPoint, SpatialTendon, WrapGeom, WrapShape};
 use crate::urdf::{
-    line_at, nearest, newline_offsets, Actuator, Joint, JointKind, LimitSource, Robot, Site,
+    line_at, nearest, newline_offsets, Actuator, Drive, Joint, JointKind, LimitSource, Robot, Site,
     MAX_DEPTH, MAX_LINKS,
 };
 use grasp_core::error::ProblemError;
@@ -273,6 +277,8 @@ fn default_kind(name: &str) -> Option<&'static str> {
     match name {
         "joint" => Some("joint"),
         "site" => Some("site"),
+        "geom" => Some("geom"),
+        "tendon" => Some("tendon"),
         "equality" => Some("equality"),
         n if ACTUATORS.contains(&n) || IGNORED_ACTUATORS.contains(&n) => Some("actuator"),
         _ => None,
@@ -436,6 +442,29 @@ impl<'a> View<'a> {
         Ok(range.filter(|_| limited))
     }
 
+    /// A site's or geom's frame: from `fromto` (centred between the points, the z axis
+    /// along them) when given, else [`View::frame`].
+    fn placement(&self, c: Compiler) -> Result<Isometry3<f64>, ProblemError> {
+        let Some(ft) = self.fixed::<6>("fromto")? else {
+            return self.frame(c);
+        };
+        let (a, b) = (
+            Vector3::new(ft[0], ft[1], ft[2]),
+            Vector3::new(ft[3], ft[4], ft[5]),
+        );
+        // MuJoCo's z axis points from `to` back to `from`.
+        let dir = a - b;
+        let rot = if dir.norm() < 1e-12 {
+            UnitQuaternion::identity()
+        } else {
+            z_to(Unit::new_normalize(dir))
+        };
+        Ok(Isometry3::from_parts(
+            Translation3::from((a + b) / 2.0),
+            rot,
+        ))
+    }
+
     /// `pos` and the orientation (at most one of quat, euler, axisangle, xyaxes, zaxis).
     fn frame(&self, c: Compiler) -> Result<Isometry3<f64>, ProblemError> {
         let pos = self.fixed::<3>("pos")?.unwrap_or([0.0; 3]);
@@ -546,6 +575,9 @@ struct Tree {
     joints: Vec<Joint>,
     reference: Vec<f64>,
     sites: Vec<Site>,
+    /// Named geoms: what a spatial tendon can wrap, or why it cannot (read only when
+    /// a tendon names it, so that no other geom can fail the model).
+    geoms: HashMap<String, Result<WrapGeom, ProblemError>>,
     warnings: Vec<String>,
     ignored: BTreeSet<String>,
     /// The floating hand's body, held fixed at the reference frame.
@@ -747,6 +779,44 @@ impl Ctx<'_> {
         self.children(t, e, link, &inner, Isometry3::identity(), false)
     }
 
+    /// A named geom as a tendon would wrap it: a sphere or a cylinder, its frame on
+    /// `link` and its radius.
+    fn wrap_geom(
+        &self,
+        e: &El,
+        name: &str,
+        link: usize,
+        childclass: &str,
+        offset: Isometry3<f64>,
+    ) -> Result<WrapGeom, ProblemError> {
+        let v = self.view(e, "geom", childclass);
+        let shape =
+            match v.get("type").unwrap_or("sphere") {
+                "sphere" => WrapShape::Sphere,
+                "cylinder" => WrapShape::Cylinder,
+                other => return Err(self.r.err(
+                    e,
+                    format!(
+                        "geom `{name}` of type {other}: a tendon wraps spheres and cylinders only"
+                    ),
+                )),
+            };
+        let radius = v.leading("size", 3)?.unwrap_or(0.0);
+        if radius <= 0.0 {
+            return Err(self.r.err(
+                e,
+                format!("geom `{name}`: a wrapping geom needs a radius size > 0"),
+            ));
+        }
+        Ok(WrapGeom {
+            name: name.to_string(),
+            link,
+            frame: offset * v.placement(self.c)?,
+            radius,
+            shape,
+        })
+    }
+
     /// The bodies, sites and frames in `e` (a body, `<worldbody>` or `<frame>`), on
     /// `link`, moved by `offset`.
     fn children(
@@ -761,7 +831,13 @@ impl Ctx<'_> {
         for c in &e.children {
             match c.name.as_str() {
                 "body" => self.body(t, c, link, childclass, offset, top)?,
-                "joint" | "freejoint" | "geom" | "inertial" | "camera" | "light" => {}
+                "geom" => {
+                    if let Some(name) = c.attr("name") {
+                        let geom = self.wrap_geom(c, name, link, childclass, offset);
+                        t.geoms.insert(name.to_string(), geom);
+                    }
+                }
+                "joint" | "freejoint" | "inertial" | "camera" | "light" => {}
                 "frame" => {
                     // A frame moves what it holds and may set their class.
                     let fv = self.view(c, "frame", childclass);
@@ -770,23 +846,7 @@ impl Ctx<'_> {
                 }
                 "site" => {
                     let sv = self.view(c, "site", childclass);
-                    let frame = match sv.fixed::<6>("fromto")? {
-                        Some(ft) => {
-                            let (a, b) = (
-                                Vector3::new(ft[0], ft[1], ft[2]),
-                                Vector3::new(ft[3], ft[4], ft[5]),
-                            );
-                            // MuJoCo's z axis points from `to` back to `from`.
-                            let dir = a - b;
-                            let rot = if dir.norm() < 1e-12 {
-                                UnitQuaternion::identity()
-                            } else {
-                                z_to(Unit::new_normalize(dir))
-                            };
-                            Isometry3::from_parts(Translation3::from((a + b) / 2.0), rot)
-                        }
-                        None => sv.frame(self.c)?,
-                    };
+                    let frame = sv.placement(self.c)?;
                     t.sites.push(Site {
                         name: c
                             .attr("name")
@@ -808,6 +868,100 @@ impl Ctx<'_> {
         }
         Ok(())
     }
+}
+
+/// A spatial tendon's path: its sites, the named sphere and cylinder geoms it wraps
+/// (each between two sites, with an optional `sidesite`) and its pulleys (each
+/// starting a branch that begins with a site). Every branch ends at a site.
+fn spatial_path(
+    r: &Reader,
+    d: &Defaults,
+    e: &El,
+    name: &str,
+    sites: &HashMap<&str, usize>,
+    geoms: &HashMap<String, Result<WrapGeom, ProblemError>>,
+) -> Result<Vec<PathPoint>, ProblemError> {
+    let site = |p: &El, key: &str| -> Result<usize, ProblemError> {
+        let s = p
+            .attr(key)
+            .ok_or_else(|| r.err(p, format!("has no {key} attribute")))?;
+        sites.get(s).copied().ok_or_else(|| {
+            r.err(
+                p,
+                format!(
+                    "{key} `{s}` is not a site of this model ({})",
+                    nearest(s, sites.keys().copied())
+                ),
+            )
+        })
+    };
+    let mut path = Vec::new();
+    for p in &e.children {
+        let point = match p.name.as_str() {
+            "site" => PathPoint::Site(site(p, "site")?),
+            "geom" => {
+                let g = p
+                    .attr("geom")
+                    .ok_or_else(|| r.err(p, "has no geom attribute"))?;
+                let geom = match geoms.get(g) {
+                    Some(Ok(geom)) => geom.clone(),
+                    Some(Err(why)) => {
+                        return Err(r.err(p, format!("tendon `{name}` wraps geom `{g}`: {why}")))
+                    }
+                    None => {
+                        return Err(
+                            r.err(p, format!("geom `{g}` is not a named geom of this model"))
+                        )
+                    }
+                };
+                let side = p
+                    .attr("sidesite")
+                    .map(|_| site(p, "sidesite"))
+                    .transpose()?;
+                PathPoint::Wrap { geom, side }
+            }
+            "pulley" => {
+                let v = View {
+                    r,
+                    d,
+                    e: p,
+                    kind: "tendon-pulley",
+                    class: String::new(),
+                };
+                let divisor = v.leading("divisor", 1)?.unwrap_or(0.0);
+                if divisor <= 0.0 {
+                    return Err(r.err(p, "a pulley needs a divisor > 0"));
+                }
+                PathPoint::Pulley { divisor }
+            }
+            _ => continue,
+        };
+        path.push(point);
+    }
+    // Branch by branch (pulleys separate them): a site, then sites or a geom followed
+    // by a site, as MuJoCo requires.
+    for branch in path.split(|p| matches!(p, PathPoint::Pulley { .. })) {
+        let sites = branch
+            .iter()
+            .filter(|p| matches!(p, PathPoint::Site(_)))
+            .count();
+        let well_formed = sites >= 2
+            && matches!(branch.first(), Some(PathPoint::Site(_)))
+            && matches!(branch.last(), Some(PathPoint::Site(_)))
+            && branch.windows(2).all(|w| {
+                !matches!(
+                    (&w[0], &w[1]),
+                    (PathPoint::Wrap { .. }, PathPoint::Wrap { .. })
+                )
+            });
+        if !well_formed {
+            return Err(r.err(
+                e,
+                format!("tendon `{name}`: each branch of a spatial tendon's path must start and end at a site, with at least two sites, and a geom between two sites"),
+            ));
+        }
+    }
+    Ok(path)
 }
 
 impl Robot {
@@ -891,6 +1045,7 @@ impl Robot {
             joints: Vec::new(),
             reference: Vec::new(),
             sites: Vec::new(),
+            geoms: HashMap::new(),
             warnings: Vec::new(),
             ignored,
             mount: None,
@@ -924,12 +1079,32 @@ impl Robot {
                 )
             })
         };
-        // Fixed tendons: name → (joint, coefficient).
+        // Fixed tendons: name → (joint, coefficient). Spatial tendons: name → index
+        // of `spatial_tendons`, or why the tendon cannot be used (an error only when an
+        // actuator pulls on it).
         let mut tendons: HashMap<String, Vec<(usize, f64)>> = HashMap::new();
-        let mut spatial = BTreeSet::new();
+        let mut spatial: HashMap<String, Result<usize, ProblemError>> = HashMap::new();
+        let mut spatial_tendons = Vec::new();
+        let site_index: HashMap<&str, usize> = t
+            .sites
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (s.name.as_str(), i))
+            .collect();
+        let mut springs = Vec::new();
         for te in top.iter().filter(|e| e.name == "tendon") {
             for e in &te.children {
                 let Some(name) = e.attr("name") else { continue };
+                let v = View {
+                    r: &r,
+                    d: &d,
+                    e,
+                    kind: "tendon",
+                    class: e.attr("class").unwrap_or("main").to_string(),
+                };
+                if v.leading("stiffness", 3)?.is_some_and(|k| k != 0.0) {
+                    springs.push(name.to_string());
+                }
                 match e.name.as_str() {
                     "fixed" => {
                         let mut terms = Vec::new();
@@ -949,11 +1124,29 @@ impl Robot {
                         }
                         tendons.insert(name.to_string(), terms);
                     }
-                    _ => {
-                        spatial.insert(name.to_string());
+                    "spatial" => {
+                        let tendon =
+                            spatial_path(&r, &d, e, name, &site_index, &t.geoms).map(|path| {
+                                spatial_tendons.push(SpatialTendon {
+                                    name: name.to_string(),
+                                    path,
+                                    line: e.line,
+                                });
+                                spatial_tendons.len() - 1
+                            });
+                        spatial.insert(name.to_string(), tendon);
+                    }
+                    other => {
+                        t.ignored.insert(format!("tendon/{other}"));
                     }
                 }
             }
+        }
+        if !springs.is_empty() {
+            t.warnings.push(format!(
+                "{source}: the springs of tendons {} (stiffness) are not part of this quasi-static model: the torque they would give comes from the actuators, or the grasp is infeasible",
+                springs.join(", ")
+            ));
         }
         // Couplings from equalities.
         for eqs in top.iter().filter(|e| e.name == "equality") {
@@ -1059,17 +1252,28 @@ impl Robot {
                     .attr("name")
                     .map_or_else(|| format!("{} at line {}", e.name, e.line), str::to_string);
                 let gear = v.leading("gear", 6)?.unwrap_or(1.0);
-                let moment: Vec<(usize, f64)> = if let Some(j) =
-                    v.get("joint").or_else(|| v.get("jointinparent"))
-                {
-                    vec![(find_joint(e, j)?, gear)]
+                let drive = if let Some(j) = v.get("joint").or_else(|| v.get("jointinparent")) {
+                    Drive::Fixed(vec![(find_joint(e, j)?, gear)])
                 } else if let Some(tn) = v.get("tendon") {
-                    match tendons.get(tn) {
-                        Some(terms) => terms.iter().map(|&(j, c)| (j, gear * c)).collect(),
-                        None if spatial.contains(tn) => {
-                            return Err(r.err(e, format!("tendon `{tn}` is a spatial tendon, whose moment arms depend on the configuration; only fixed tendons are supported")))
+                    match (tendons.get(tn), spatial.get(tn)) {
+                        (Some(terms), _) => {
+                            Drive::Fixed(terms.iter().map(|&(j, c)| (j, gear * c)).collect())
                         }
-                        None => return Err(r.err(e, format!("tendon `{tn}` is not a tendon of this model"))),
+                        (None, Some(Ok(tendon))) => Drive::Tendon {
+                            tendon: *tendon,
+                            gear,
+                        },
+                        (None, Some(Err(why))) => {
+                            return Err(r.err(
+                                e,
+                                format!("pulls on tendon `{tn}`, which cannot be used: {why}"),
+                            ))
+                        }
+                        (None, None) => {
+                            return Err(
+                                r.err(e, format!("tendon `{tn}` is not a tendon of this model"))
+                            )
+                        }
                     }
                 } else {
                     t.warnings.push(format!(
@@ -1113,7 +1317,7 @@ impl Robot {
                 actuators.push(Actuator {
                     name,
                     kind: e.name.clone(),
-                    moment,
+                    drive,
                     limit: limit.filter(|&l| l > 0.0),
                     limit_source: if limit.is_some_and(|l| l > 0.0) {
                         source
@@ -1155,6 +1359,7 @@ impl Robot {
         )?;
         robot.sites = t.sites;
         robot.actuators = actuators;
+        robot.tendons = spatial_tendons;
         Ok(robot)
     }
 }

@@ -18,6 +18,7 @@
 //! joint follows `q = multiplier · q_leader + offset`; chains of mimics are resolved to
 //! the independent joint at their end.
 
+use crate::tendon::SpatialTendon;
 use grasp_core::error::ProblemError;
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::collections::HashMap;
@@ -136,6 +137,9 @@ pub struct Robot {
     /// Actuators (MJCF `<actuator>`; none in a URDF, whose joints are driven one to
     /// one).
     pub actuators: Vec<Actuator>,
+    /// Spatial tendons that actuators pull on (MJCF `<tendon><spatial>`; none in a
+    /// URDF).
+    pub tendons: Vec<SpatialTendon>,
     /// Per link: the joint whose child it is (`None` for the root).
     parent_joint: Vec<Option<usize>>,
     /// Links from the root outwards: every parent comes before its children.
@@ -168,6 +172,22 @@ pub enum LimitSource {
     None,
 }
 
+/// How an actuator's force moves the joints.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Drive {
+    /// Constant moment arms (index into [`Robot::joints`], value): the gear on a joint,
+    /// the gear times the coefficients of a fixed tendon.
+    Fixed(Vec<(usize, f64)>),
+    /// `gear` times the moment arms of a spatial tendon (an index of
+    /// [`Robot::tendons`]), which depend on the configuration.
+    Tendon {
+        /// The tendon.
+        tendon: usize,
+        /// The gear.
+        gear: f64,
+    },
+}
+
 /// One actuator: how its force u moves the joints.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Actuator {
@@ -175,9 +195,8 @@ pub struct Actuator {
     pub name: String,
     /// The MJCF element (`motor`, `general`, `position`, …).
     pub kind: String,
-    /// Moment arms on the joints (index into [`Robot::joints`], value): the gear on a
-    /// joint, the gear times the tendon coefficients on a fixed tendon.
-    pub moment: Vec<(usize, f64)>,
+    /// How its force moves the joints.
+    pub drive: Drive,
     /// `|u| ≤ limit`.
     pub limit: Option<f64>,
     /// Where the limit comes from.
@@ -767,6 +786,7 @@ impl Robot {
             link_lines,
             sites: Vec::new(),
             actuators: Vec::new(),
+            tendons: Vec::new(),
         })
     }
 
@@ -819,6 +839,7 @@ impl Robot {
             link_lines,
             sites: Vec::new(),
             actuators: Vec::new(),
+            tendons: Vec::new(),
         })
     }
 

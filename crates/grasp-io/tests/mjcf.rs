@@ -42,6 +42,7 @@ fn jacobians_and_transmissions_match_mujoco() {
         "menagerie-leap",
         "menagerie-dexee",
         "menagerie-panda",
+        "menagerie-aero",
     ];
     for name in named
         .iter()
@@ -159,6 +160,16 @@ fn malformed_mjcf_is_a_named_error() {
     let body = |inner: &str| {
         format!("<mujoco><worldbody><body name=\"b\">{inner}</body></worldbody></mujoco>")
     };
+    // An actuator on a spatial tendon with this path.
+    let spatial = |path: &str| {
+        format!(
+            "<mujoco><worldbody><site name=\"s0\" pos=\"-1 0 0\"/><body><joint name=\"a\"/>\
+             <geom name=\"c\" type=\"cylinder\" size=\"0.1 1\"/><geom name=\"box\" type=\"box\" size=\"1 1 1\"/>\
+             <geom name=\"flat\" type=\"cylinder\" size=\"0 1\"/><geom type=\"sphere\" size=\"1\"/>\
+             <site name=\"s1\" pos=\"1 0 0\"/></body></worldbody>\
+             <tendon><spatial name=\"t\">{path}</spatial></tendon><actuator><motor tendon=\"t\"/></actuator></mujoco>"
+        )
+    };
     for (text, needle) in [
         ("<robot/>".to_string(), "root element"),
         ("<mujoco><worldbody>".to_string(), "well-formed"),
@@ -181,7 +192,16 @@ fn malformed_mjcf_is_a_named_error() {
         ("<mujoco><actuator><motor joint=\"nope\"/></actuator></mujoco>".to_string(), "not a hinge or slide joint"),
         ("<mujoco><worldbody><body><joint name=\"a\"/><joint name=\"b\"/></body></worldbody><equality><joint joint1=\"a\" joint2=\"b\" polycoef=\"0 1 2 0 0\"/></equality></mujoco>".to_string(), "only a linear coupling"),
         ("<mujoco><worldbody><body><joint name=\"a\"/></body></worldbody><equality><connect body1=\"a\" body2=\"b\" anchor=\"0 0 0\"/></equality></mujoco>".to_string(), "loop-closing"),
-        ("<mujoco><worldbody><body><joint name=\"a\"/></body></worldbody><tendon><spatial name=\"s\"/></tendon><actuator><motor tendon=\"s\"/></actuator></mujoco>".to_string(), "spatial tendon"),
+        ("<mujoco><worldbody><body><joint name=\"a\"/></body></worldbody><tendon><spatial name=\"s\"/></tendon><actuator><motor tendon=\"s\"/></actuator></mujoco>".to_string(), "pulls on tendon `s`, which cannot be used"),
+        (spatial("<site site=\"s0\"/><geom geom=\"box\"/><site site=\"s1\"/>"), "a tendon wraps spheres and cylinders only"),
+        (spatial("<site site=\"s0\"/><geom geom=\"nameless\"/><site site=\"s1\"/>"), "is not a named geom"),
+        (spatial("<site site=\"s0\"/><site site=\"s9\"/>"), "site `s9` is not a site of this model"),
+        (spatial("<site site=\"s0\"/><geom geom=\"c\" sidesite=\"x\"/><site site=\"s1\"/>"), "sidesite `x` is not a site"),
+        (spatial("<geom geom=\"c\"/><site site=\"s1\"/>"), "must start and end at a site"),
+        (spatial("<site site=\"s0\"/><geom geom=\"c\"/><geom geom=\"c\"/><site site=\"s1\"/>"), "a geom between two sites"),
+        (spatial("<site site=\"s0\"/><site site=\"s1\"/><pulley divisor=\"0\"/><site site=\"s0\"/><site site=\"s1\"/>"), "divisor > 0"),
+        (spatial("<site site=\"s0\"/><site site=\"s1\"/><pulley divisor=\"2\"/><site site=\"s0\"/>"), "at least two sites"),
+        (spatial("<site site=\"s0\"/><geom geom=\"flat\"/><site site=\"s1\"/>"), "radius size > 0"),
         ("<mujoco><worldbody><body><joint name=\"a\"/><joint name=\"b\"/></body></worldbody><actuator><motor joint=\"a\" forcerange=\"2 1\" forcelimited=\"true\"/></actuator></mujoco>".to_string(), "expected lower < upper"),
         (body("<joint limited=\"true\"/>"), "limited=\"true\" without a range"),
         (format!("<mujoco><worldbody>{}{}</worldbody></mujoco>", "<body>".repeat(100_000), "</body>".repeat(100_000)), "nested"),
