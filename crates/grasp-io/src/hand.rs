@@ -625,11 +625,19 @@ impl HandFile {
             warnings,
             tendon_columns,
         };
-        // The template's spatial tendon arms: at every joint's 0.
+        // The template's spatial tendon arms: at every joint's 0 (every pose computes
+        // its own; where 0 puts a side site inside its geom, the columns stay 0).
         if !grasps.tendon_columns.is_empty() {
             let frames = robot.pose_of(&vec![0.0; robot.independent.len()], &grasps.needed);
             let mut template = grasps.template.clone();
-            grasps.tendon_arms(&frames, &mut template)?;
+            if grasps.tendon_arms(&frames, &mut template).is_err() {
+                for &(c, ..) in &grasps.tendon_columns {
+                    let t = template.transmission.as_mut().expect("actuated");
+                    for r in 0..t.matrix.nrows() {
+                        t.matrix[(r, c)] = 0.0;
+                    }
+                }
+            }
             grasps.template = template;
         }
         Ok(grasps)

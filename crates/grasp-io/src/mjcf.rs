@@ -790,17 +790,18 @@ impl Ctx<'_> {
         offset: Isometry3<f64>,
     ) -> Result<WrapGeom, ProblemError> {
         let v = self.view(e, "geom", childclass);
-        let shape =
-            match v.get("type").unwrap_or("sphere") {
-                "sphere" => WrapShape::Sphere,
-                "cylinder" => WrapShape::Cylinder,
-                other => return Err(self.r.err(
+        let shape = match v.get("type").unwrap_or("sphere") {
+            "sphere" => WrapShape::Sphere,
+            "cylinder" => WrapShape::Cylinder,
+            other => {
+                return Err(self.r.err(
                     e,
                     format!(
                         "geom `{name}` of type {other}: a tendon wraps spheres and cylinders only"
                     ),
-                )),
-            };
+                ))
+            }
+        };
         let radius = v.leading("size", 3)?.unwrap_or(0.0);
         if radius <= 0.0 {
             return Err(self.r.err(

@@ -156,6 +156,8 @@ fn a_side_site_inside_its_geom_is_a_named_error() {
         "wrench": [0, 1, 0, 0, 0, 0]
     }))
     .unwrap();
+    // The hand loads; the configuration is what fails.
+    assert!(file.grasps(&robot).is_ok());
     let e = file.build(&robot).unwrap_err().to_string();
     assert!(
         e.contains("joint_positions") && e.contains("side site of geom `g`"),
