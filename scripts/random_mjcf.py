@@ -10,14 +10,23 @@ with anchors and references, fixed tendons, joint and tendon equalities with a l
 `polycoef`, and `motor`, `position` and `general` actuators on joints or fixed tendons
 with gears, force and control ranges. A model MuJoCo refuses is drawn again.
 
+With `--spatial`, each hand also routes spatial tendons (`spatial-*.xml`): a string per
+finger from a palm site through a site on each finger body, wrapping spheres and
+cylinders (placed by `pos` and an orientation or by `fromto`) with and without side
+sites, sometimes through a site on another finger, sometimes two fingers' strings
+joined by a `<pulley>` with a divisor, some with springs; actuators pull on them.
+
 Run from the repository root (mujoco 3.3 and numpy from PyPI; see oracle_mjcf.py):
 
     /tmp/mj/bin/python scripts/random_mjcf.py
+    /tmp/mj/bin/python scripts/random_mjcf.py --spatial
 
-It writes fixtures/mjcf/random/random-*.xml; oracle_mjcf.py then writes their oracles.
+It writes fixtures/mjcf/random/random-*.xml (spatial-*.xml); oracle_mjcf.py then writes
+their oracles.
 """
 
 import os
+import sys
 
 import mujoco
 import numpy as np
@@ -32,8 +41,11 @@ def fmt(v):
 
 
 class Hand:
-    def __init__(self, rng):
+    def __init__(self, rng, spatial=False):
         self.rng = rng
+        self.spatial = spatial
+        # Per finger, its spatial path: [(site, geom or None, side site or None)].
+        self.routes = {}
         self.degrees = bool(rng.integers(2))
         self.seq = str(rng.choice(["xyz", "zyx", "XYZ", "xzy", "ZYX", "yxz"]))
         # Without autolimits, every range says whether it limits.
@@ -111,6 +123,8 @@ class Hand:
             for _ in range(1 + (rng.random() < 0.2)):
                 out.append(self.joint(f, k, "distal" if d > 0 and cls else None))
                 k += 1
+            if self.spatial:
+                out.extend(self.route(f, d))
         site = f"f{f}_tip"
         if rng.random() < 0.2:
             ends = fmt(rng.uniform(-0.02, 0.02, 6))
@@ -122,6 +136,76 @@ class Hand:
         if rng.random() < 0.3:
             out = [f"<frame{self.frame()}>"] + out + ["</frame>"]
         return out
+
+    def route(self, f, d):
+        """A wrap geom (sometimes, with a side site outside it) and a routing site on
+        body d of finger f, on the finger's spatial path."""
+        rng = self.rng
+        out = []
+        geom = side = None
+        if rng.random() < 0.7:
+            geom = f"f{f}_g{d}"
+            r = rng.uniform(0.003, 0.012)
+            centre = rng.uniform(-0.01, 0.01, 3)
+            if rng.random() < 0.5:
+                axis = rng.normal(size=3)
+                axis /= np.linalg.norm(axis)
+                if rng.random() < 0.3:
+                    h = rng.uniform(0.005, 0.02)
+                    ends = np.concatenate([centre - h * axis, centre + h * axis])
+                    out.append(f'<geom name="{geom}" type="cylinder" size="{r:.6g}" fromto="{fmt(ends)}"/>')
+                else:
+                    out.append(f'<geom name="{geom}" type="cylinder" size="{r:.6g} 0.01" '
+                               f'pos="{fmt(centre)}" zaxis="{fmt(axis)}"/>')
+                # Off the axis, outside the radius (MuJoCo's inside wrap is not read).
+                away = np.cross(axis, rng.normal(size=3))
+                away = away / np.linalg.norm(away) * r * rng.uniform(1.5, 3)
+                at = centre + away + axis * rng.uniform(-0.005, 0.005)
+            else:
+                out.append(f'<geom name="{geom}" type="sphere" size="{r:.6g}" pos="{fmt(centre)}"/>')
+                away = rng.normal(size=3)
+                at = centre + away / np.linalg.norm(away) * r * rng.uniform(1.5, 3)
+            if rng.random() < 0.6:
+                side = f"f{f}_side{d}"
+                out.append(f'<site name="{side}" pos="{fmt(at)}"/>')
+        site = f"f{f}_r{d}"
+        out.append(f'<site name="{site}" pos="{fmt(rng.uniform(-0.02, 0.02, 3))}"/>')
+        self.routes.setdefault(f, []).append((site, geom, side))
+        return out
+
+    def spatial_tendons(self, fingers):
+        """Per finger (sometimes), a string from a palm site along its route; sometimes
+        through a site of another finger, sometimes two fingers joined by a pulley."""
+        rng = self.rng
+
+        def path(f):
+            out = [f'      <site site="palm_r{f}"/>']
+            for site, geom, side in self.routes[f]:
+                if geom is not None and rng.random() < 0.8:
+                    attrs = f' sidesite="{side}"' if side is not None else ""
+                    out.append(f'      <geom geom="{geom}"{attrs}/>')
+                out.append(f'      <site site="{site}"/>')
+            return out
+
+        names, body = [], []
+        order = [f for f in range(fingers) if rng.random() < 0.8]
+        while order:
+            f = order.pop(0)
+            lines = path(f)
+            if rng.random() < 0.2 and fingers > 1:
+                # On to a site of another finger's first body.
+                g = int(rng.choice([x for x in range(fingers) if x != f]))
+                lines.append(f'      <site site="{self.routes[g][0][0]}"/>')
+            name = f"s{f}"
+            if order and rng.random() < 0.3:
+                g = order.pop(0)
+                lines.append(f'      <pulley divisor="{rng.uniform(0.5, 3):.6g}"/>')
+                lines += path(g)
+                name = f"s{f}_{g}"
+            spring = f' stiffness="{rng.uniform(1, 50):.6g}"' if rng.random() < 0.2 else ""
+            body += [f'    <spatial name="{name}"{spring}>'] + lines + ["    </spatial>"]
+            names.append(name)
+        return names, body
 
     def model(self, fingers):
         rng = self.rng
@@ -141,6 +225,9 @@ class Hand:
                   "    </default>",
                   "  </default>"]
         lines += ["  <worldbody>", f'    <body name="palm"{self.frame(0.1)}>']
+        if self.spatial:
+            lines += [f'      <site name="palm_r{f}" pos="{fmt(rng.uniform(-0.04, 0.04, 3))}"/>'
+                      for f in range(fingers)]
         for f in range(fingers):
             cls = "finger" if rng.random() < 0.6 else None
             for line in self.finger(f, int(rng.integers(2, 5)), cls):
@@ -161,6 +248,10 @@ class Hand:
                     c = rng.uniform(0.2, 1.5) * (1 if rng.random() < 0.8 else -1)
                     body.append(f'      <joint joint="{j}" coef="{c:.6g}"/>')
                 body.append("    </fixed>")
+        spatial = []
+        if self.spatial:
+            spatial, more = self.spatial_tendons(fingers)
+            body += more
         if body:
             lines += ["  <tendon>"] + body + ["  </tendon>"]
         # Equalities: a follower joint per finger at most, following an earlier one of
@@ -187,6 +278,10 @@ class Hand:
         targets += [("tendon", t) for t, _ in tendons]
         rng.shuffle(targets)
         n = max(1, len(targets) - int(rng.integers(0, 3)))
+        if spatial:
+            # The spatial tendons first, and fewer actuators than independent joints.
+            targets = [("tendon", t) for t in spatial] + targets
+            n = min(len(targets), max(1, len(self.joints) - len(coupled) - int(rng.integers(0, 3))))
         for i, (kind, name) in enumerate(targets[:n]):
             a = str(rng.choice(["motor", "position", "general", "velocity", "intvelocity", "cylinder"]))
             attrs = f'name="a{i}" {kind}="{name}"'
@@ -243,12 +338,14 @@ def independent_actuators(m):
 
 def main():
     os.makedirs(OUT, exist_ok=True)
+    spatial = "--spatial" in sys.argv[1:]
+    stem, base = ("spatial", 3000) if spatial else ("random", 1000)
     seed = 0
     written = 0
     while written < MODELS:
         seed += 1
-        rng = np.random.default_rng(1000 + seed)
-        hand = Hand(rng)
+        rng = np.random.default_rng(base + seed)
+        hand = Hand(rng, spatial)
         text = hand.model(int(rng.integers(2, 5)))
         try:
             m = mujoco.MjModel.from_xml_string(text.replace(
@@ -260,11 +357,13 @@ def main():
         if not independent_actuators(m):
             print(f"seed {seed}: its actuators are dependent; drawn again")
             continue
-        header = (f"<!-- Drawn by scripts/random_mjcf.py (seed {1000 + seed}) for the MJCF "
+        # ("--" may not appear in an XML comment.)
+        header = (f"<!-- Drawn by scripts/random_mjcf.py{' (spatial)' if spatial else ''} "
+                  f"(seed {base + seed}) for the MJCF "
                   "reader's oracle: a random hand using every form the reader claims to read. -->\n")
-        with open(os.path.join(OUT, f"random-{written}.xml"), "w") as f:
+        with open(os.path.join(OUT, f"{stem}-{written}.xml"), "w") as f:
             f.write(header + text)
-        print(f"random-{written}: seed {1000 + seed}, {m.njnt} joints, {m.nu} actuators, "
+        print(f"{stem}-{written}: seed {base + seed}, {m.njnt} joints, {m.nu} actuators, "
               f"{m.ntendon} tendons, {m.neq} equalities")
         written += 1
 

@@ -16,21 +16,17 @@ fn repo(p: &str) -> PathBuf {
 #[test]
 fn jacobians_and_transmissions_match_mujoco() {
     let dir = repo("fixtures/mjcf/oracle");
-    // The random hands of scripts/random_mjcf.py, all of them.
+    // The random hands of scripts/random_mjcf.py, all of them (`spatial-*`: with
+    // spatial tendons).
     let mut randoms: Vec<String> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter_map(|f| {
-            Some(
-                f.strip_prefix("random-")?
-                    .strip_suffix(".json")?
-                    .to_string(),
-            )
-        })
-        .map(|i| format!("random-{i}"))
+        .filter(|f| f.starts_with("random-") || f.starts_with("spatial-"))
+        .filter_map(|f| Some(f.strip_suffix(".json")?.to_string()))
         .collect();
     randoms.sort();
-    assert!(randoms.len() >= 8, "{randoms:?}");
+    let spatial = randoms.iter().filter(|r| r.starts_with("spatial-")).count();
+    assert!(randoms.len() - spatial >= 8 && spatial >= 6, "{randoms:?}");
     let named = [
         "shadow",
         "adroit",
@@ -52,7 +48,11 @@ fn jacobians_and_transmissions_match_mujoco() {
         let text = std::fs::read_to_string(dir.join(format!("{name}.json"))).unwrap();
         let oracle: serde_json::Value = serde_json::from_str(&text).unwrap();
         let cases = oracle["cases"].as_array().unwrap();
-        let least = if name.starts_with("random-") { 20 } else { 50 };
+        let least = if randoms.iter().any(|r| r == name) {
+            20
+        } else {
+            50
+        };
         assert!(
             cases.len() >= least,
             "{name}: {} configurations",
