@@ -12,6 +12,8 @@ writes per configuration:
   (`Jᵀ = Pᵀ Jᵀ_full`);
 - `transmission`: T by joint and actuator name, from `data.actuator_moment` after
   `mj_forward`, reduced the same way (`T = Pᵀ T_full`);
+- `passive_torque` (hands with springs): the springs' joint torques `data.qfrc_spring`,
+  reduced the same way;
 - `grasp_matrix`: the expected G;
 - `frames` (the first five configurations): every site's and body's frame in the world
   (`site_xpos`/`site_xmat`, `xpos`/`xmat`), for `Robot::named_frame` and the poses;
@@ -291,12 +293,14 @@ def main():
             moment = np.zeros((m.nu, m.nv))
             mujoco.mju_sparse2dense(moment, d.actuator_moment, d.moment_rownnz,
                                     d.moment_rowadr, d.moment_colind)
-            jt, tr = {}, {}
+            jt, tr, springs = {}, {}, {}
             for j in independent:
                 jt[jname(j)] = [0.0] * jt_full.shape[1]
                 tr[jname(j)] = {}
+                springs[jname(j)] = 0.0
             for j, (lead, mult, _) in coup.items():
                 dof = m.jnt_dofadr[j]
+                springs[jname(lead)] += mult * d.qfrc_spring[dof]
                 row = jt[jname(lead)]
                 for c_ in range(jt_full.shape[1]):
                     row[c_] += mult * jt_full[dof, c_]
@@ -329,6 +333,8 @@ def main():
                 "transmission": tr,
                 "grasp_matrix": np.array(gcols).T.tolist(),
             }
+            if any(v != 0.0 for v in springs.values()):
+                case_out["passive_torque"] = springs
             if case < FRAME_CASES:
                 # Every site's and body's frame in the world: position, then the
                 # rotation matrix row by row (MuJoCo's site_xmat, xmat).

@@ -14,7 +14,9 @@ With `--spatial`, each hand also routes spatial tendons (`spatial-*.xml`): a str
 finger from a palm site through a site on each finger body, wrapping spheres and
 cylinders (placed by `pos` and an orientation or by `fromto`) with and without side
 sites, sometimes through a site on another finger, sometimes two fingers' strings
-joined by a `<pulley>` with a divisor, some with springs; actuators pull on them.
+joined by a `<pulley>` with a divisor; actuators pull on them. Springs (`stiffness`, with
+`springref`, or `springlength` as a length, a range or MuJoCo's default) sit on some
+joints, fixed tendons and spatial tendons.
 
 Run from the repository root (mujoco 3.3 and numpy from PyPI; see oracle_mjcf.py):
 
@@ -108,6 +110,12 @@ class Hand:
             else:
                 lo, hi = self.angle(lo), self.angle(hi)
             attrs += f' range="{lo:.6g} {hi:.6g}"' + self.flag("")
+        if self.spatial and rng.random() < 0.3:
+            # A spring, at rest at springref (MuJoCo's qfrc_spring = −k (q − springref)).
+            ref = rng.uniform(-0.01, 0.01) if kind == "slide" else self.angle(rng.uniform(-0.5, 0.5))
+            attrs += f' stiffness="{rng.uniform(0.1, 5):.6g}"'
+            if rng.random() < 0.7:
+                attrs += f' springref="{ref:.6g}"'
         self.joints.append((name, finger, kind))
         return f"<joint {attrs}/>"
 
@@ -202,7 +210,16 @@ class Hand:
                 lines.append(f'      <pulley divisor="{rng.uniform(0.5, 3):.6g}"/>')
                 lines += path(g)
                 name = f"s{f}_{g}"
-            spring = f' stiffness="{rng.uniform(1, 50):.6g}"' if rng.random() < 0.2 else ""
+            spring = ""
+            if rng.random() < 0.3:
+                spring = f' stiffness="{rng.uniform(1, 50):.6g}"'
+                r = rng.random()
+                if r < 0.3:
+                    spring += f' springlength="{rng.uniform(0.02, 0.1):.6g}"'
+                elif r < 0.5:
+                    lo = rng.uniform(0.02, 0.08)
+                    spring += f' springlength="{lo:.6g} {lo + rng.uniform(0, 0.03):.6g}"'
+                # else: at rest at the length with every joint at its springref.
             body += [f'    <spatial name="{name}"{spring}>'] + lines + ["    </spatial>"]
             names.append(name)
         return names, body
@@ -243,7 +260,13 @@ class Hand:
                 chosen = list(rng.choice(js, size=n, replace=False))
                 name = f"t{f}"
                 tendons.append((name, chosen))
-                body.append(f'    <fixed name="{name}">')
+                spring = ""
+                if self.spatial and rng.random() < 0.3:
+                    spring = f' stiffness="{rng.uniform(0.5, 5):.6g}"'
+                    if rng.random() < 0.5:
+                        lo = rng.uniform(-0.3, 0.3)
+                        spring += f' springlength="{lo:.6g} {lo + rng.uniform(0, 0.2):.6g}"'
+                body.append(f'    <fixed name="{name}"{spring}>')
                 for j in chosen:
                     c = rng.uniform(0.2, 1.5) * (1 if rng.random() < 0.8 else -1)
                     body.append(f'      <joint joint="{j}" coef="{c:.6g}"/>')

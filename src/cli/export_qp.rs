@@ -52,7 +52,8 @@ pub(crate) fn run(args: &ExportQpArgs) -> Result<u8> {
     let rows = |m: &Matrix| m.to_rows();
     let v = json!({
         "problem": args.problem.display().to_string(),
-        "form": "minimise Σ_j weights_j τ_j² subject to H τ ≥ c(w) = c0 − Hw w and C τ = e(w) = −Cw w",
+        "form": "minimise Σ_j weights_j τ_j² subject to H τ ≥ c(w) = c0 − Hw w and C τ = e(w) = −Cw w; the answer is τ + torque_offset (passive torques)",
+        "torque_offset": (!qp.model.passive.is_empty()).then_some(&qp.model.passive.torque_offset),
         "joints": qp.joints(),
         "joint_names": (0..qp.joints()).map(|j| qp.model.joint_name(j)).collect::<Vec<_>>(),
         "sides": p.linearization.sides,

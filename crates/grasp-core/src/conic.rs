@@ -188,8 +188,10 @@ impl ConicForm {
                          v: &[(usize, f64)]| {
             let start = new_row(data);
             let a = &mut data[start..];
-            let mut bw = [0.0; 6];
+            let (mut bw, mut b) = ([0.0; 6], 0.0);
             for &(i, c) in v {
+                // The passive torques' force at v = 0 (Passive::solver_force).
+                b += c * model.passive.solver_force.get(i).copied().unwrap_or(0.0);
                 for ((aj, z), s) in a.iter_mut().zip(model.z2.row(i)).zip(&col_scale) {
                     *aj -= c * z / s;
                 }
@@ -204,7 +206,7 @@ impl ConicForm {
                     *bj += c * z;
                 }
             }
-            b0.push(0.0);
+            b0.push(b);
             bws.push(bw);
         };
         let mut cones = Vec::new();

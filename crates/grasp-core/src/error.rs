@@ -89,4 +89,12 @@ pub enum ModelError {
     /// The rank tolerance is not in `(0, 1)`.
     #[error("rank_tolerance must be in (0, 1), got {0}")]
     RankTolerance(f64),
+    /// A formulation that does not model part of the problem.
+    #[error("{formulation} does not model {what}")]
+    Unsupported {
+        /// The formulation, such as "the contact-force baseline".
+        formulation: &'static str,
+        /// What it leaves out.
+        what: &'static str,
+    },
 }

@@ -182,6 +182,44 @@ pub struct GraspModel {
     /// `[Z1 | Z2 | N]` column-major (n rows), for `f = Z1 w + Z2 τ + N ξ` in passes
     /// down columns.
     pub force_cols: Vec<f64>,
+    /// The passive joint torques (joint space), empty without any.
+    pub passive: Passive,
+}
+
+/// What passive joint torques `τ_p` (`Jᵀ f = T u + τ_p`) add to the model: constants
+/// in its equations, all empty without passive torques.
+///
+/// In the torques u, `[G; E; T⁺Jᵀ] f = [w; Q₂ᵀ τ_p; u + T⁺ τ_p]`, so that
+/// `f = Z1 w + Z2 u + f_p` and `C u = e(w) + e_p`. The solvers see
+/// `v = u − u_p` instead, with `u_p` the least `Σ w_j u_j²` solution of `C u_p = e_p`:
+/// then `C v = e(w)` as without passive torques, the cone rows and limits only shift,
+/// and the objective is unchanged up to a constant on the feasible set
+/// (`u_pᵀ W v = λᵀ C v = λᵀ e(w)` because `W u_p = Cᵀ λ`). The core adds `u_p` back to
+/// every answer, and takes it off a warm start.
+#[derive(Clone, Debug, Default)]
+pub struct Passive {
+    /// `τ_p` per joint.
+    pub joint_torque: Vec<f64>,
+    /// The targets of the rows of E and Jᵀ: `[Q₂ᵀ τ_p; T⁺ τ_p]` (k + m).
+    pub row_targets: Vec<f64>,
+    /// `f_p`: the contact forces at `w = 0`, `u = 0`.
+    pub force: Vec<f64>,
+    /// `u_p`, per torque variable.
+    pub torque_offset: Vec<f64>,
+    /// `f_p + Z2 u_p`: the contact forces at `w = 0`, `v = 0`.
+    pub solver_force: Vec<f64>,
+    /// `e_p`: `C u − e(w) = e_p`, per equality row.
+    pub eq_offset: Vec<f64>,
+    /// Added to `unreachable · w` (equilibrated units): a passive torque that no
+    /// contact force can balance makes every wrench unreachable.
+    pub unreachable_offset: Vec<f64>,
+}
+
+impl Passive {
+    /// Whether there are passive torques.
+    pub fn is_empty(&self) -> bool {
+        self.joint_torque.is_empty()
+    }
 }
 
 /// The joint space of a model whose torques are actuator forces: `τ = T u`.
@@ -250,15 +288,21 @@ impl ActuatorSpace {
     }
 }
 
+/// The rows of `[E; Jᵀ]` and their passive targets.
+type ActuatorRows = (Matrix, Matrix, Option<ActuatorSpace>, Vec<f64>);
+
 /// The decision rows `T⁺ Jᵀ`, the unactuated rows `Q₂ᵀ Jᵀ` and the joint space, or
-/// `Jᵀ` itself without a transmission (or with `T = I`).
-fn actuator_space(
-    p: &GraspProblem,
-    rank_tolerance: f64,
-) -> Result<(Matrix, Matrix, Option<ActuatorSpace>), ModelError> {
+/// `Jᵀ` itself without a transmission (or with `T = I`); and the passive torques' targets
+/// of those rows, `[Q₂ᵀ τ_p; T⁺ τ_p]` (empty without passive torques).
+fn actuator_space(p: &GraspProblem, rank_tolerance: f64) -> Result<ActuatorRows, ModelError> {
     let n = p.force_dim();
     let Some(t) = p.transmission.as_ref().filter(|t| !t.is_identity()) else {
-        return Ok((p.jacobian_transpose.clone(), Matrix::zeros(0, n), None));
+        return Ok((
+            p.jacobian_transpose.clone(),
+            Matrix::zeros(0, n),
+            None,
+            p.passive_torque.clone().unwrap_or_default(),
+        ));
     };
     let tm = &t.matrix;
     let (m, a) = (tm.nrows(), tm.ncols());
@@ -281,6 +325,13 @@ fn actuator_space(
     };
     let jt = tplus.matmul(&p.jacobian_transpose);
     let unactuated = q2t.matmul(&p.jacobian_transpose);
+    let targets = match &p.passive_torque {
+        Some(tp) => (0..q2t.nrows())
+            .map(|i| dot(q2t.row(i), tp))
+            .chain((0..tplus.nrows()).map(|i| dot(tplus.row(i), tp)))
+            .collect(),
+        None => Vec::new(),
+    };
     Ok((
         jt,
         unactuated,
@@ -301,6 +352,7 @@ fn actuator_space(
             // Filled by the model, which knows the force units.
             joint_reach: Vec::new(),
         }),
+        targets,
     ))
 }
 
@@ -323,7 +375,7 @@ impl GraspModel {
             return Err(ModelError::RankTolerance(opts.rank_tolerance));
         }
         let n = p.force_dim();
-        let (jt, unactuated, mut actuators) = actuator_space(p, opts.rank_tolerance)?;
+        let (jt, unactuated, mut actuators, row_targets) = actuator_space(p, opts.rank_tolerance)?;
         let (k, m) = (unactuated.nrows(), jt.nrows());
         // Row i of A = [G; E; Jᵀ] (E: the unactuated directions, target 0), without
         // stacking a copy.
@@ -450,9 +502,29 @@ impl GraspModel {
             Matrix::from_rows_data(n, m, z2),
         );
         let passive_basis = Matrix::from_fn(n, n - rank, |i, k| dinv[i] * dec.null_basis[(i, k)]);
+        // Passive torques: the targets [Q₂ᵀ τ_p; T⁺ τ_p] of E's and Jᵀ's rows, and the
+        // force f_p = Z [0; those] they call for.
+        let passive_force: Vec<f64> = if row_targets.is_empty() {
+            Vec::new()
+        } else {
+            (0..n)
+                .map(|i| {
+                    let z = &zm.row(i)[6..];
+                    dinv[i]
+                        * z.iter()
+                            .zip(&r[6..])
+                            .zip(&row_targets)
+                            .map(|((z, ri), t)| z * ri * t)
+                            .sum::<f64>()
+                })
+                .collect()
+        };
         let mut wrench_scale = [1.0; 6];
         wrench_scale.copy_from_slice(&r[..6]);
 
+        // The passive targets' part of each consistency row, and of each unreachable
+        // row (equilibrated), by the same transforms as the wrench's.
+        let (mut eq_passive, mut unreachable_offset) = (Vec::new(), Vec::new());
         let (eq, eq_w, unreachable, eq_basis, eq_null) = match opts.equilibrium {
             Equilibrium::PaperModel => (
                 Matrix::zeros(0, m),
@@ -491,7 +563,57 @@ impl GraspModel {
                         .map(|k| dc.left_null[(k, i)] * pw0[(k, j)])
                         .sum::<f64>()
                 });
+                if !row_targets.is_empty() {
+                    // U⊥ᵀ R [0; targets], then through the same transforms: C τ' =
+                    // −eq_w w − (this), and `unreachable` gains it.
+                    let pp: Vec<f64> = (0..p0)
+                        .map(|c| {
+                            (0..k + m)
+                                .map(|j| u[(6 + j, c)] * r[6 + j] * row_targets[j])
+                                .sum::<f64>()
+                        })
+                        .collect();
+                    eq_passive = (0..rc).map(|i| dot(dc.row_transform.row(i), &pp)).collect();
+                    unreachable_offset = (0..q)
+                        .map(|i| (0..p0).map(|c| dc.left_null[(c, i)] * pp[c]).sum::<f64>())
+                        .collect();
+                }
                 (eq, eq_w, unreachable, dc.row_basis, dc.null_basis)
+            }
+        };
+        let weights = p.torque_weights.clone().unwrap_or_else(|| vec![1.0; m]);
+        let passive = match &p.passive_torque {
+            None => Passive::default(),
+            Some(tp) => {
+                let eq_offset: Vec<f64> = eq_passive.iter().map(|v| -v).collect();
+                // u_p = D⁻¹ (C D⁻¹)⁺ e_p with D = diag(√w): the least Σ w_j u_j².
+                let mut torque_offset = vec![0.0; m];
+                if eq.nrows() > 0 {
+                    let dinv_w: Vec<f64> = weights.iter().map(|w| 1.0 / w.sqrt()).collect();
+                    let cd = Matrix::from_fn(eq.nrows(), m, |i, j| eq[(i, j)] * dinv_w[j]);
+                    let pinv = decompose(&cd, RankThreshold::Relative(1e-13))
+                        .map_err(|_| ModelError::Decomposition {
+                            what: "the consistency equalities",
+                            rows: eq.nrows(),
+                            cols: m,
+                        })?
+                        .pseudo_inverse();
+                    for (j, t) in torque_offset.iter_mut().enumerate() {
+                        *t = dinv_w[j] * dot(pinv.row(j), &eq_offset);
+                    }
+                }
+                let solver_force = (0..n)
+                    .map(|i| passive_force[i] + dot(z2.row(i), &torque_offset))
+                    .collect();
+                Passive {
+                    joint_torque: tp.clone(),
+                    row_targets,
+                    force: passive_force,
+                    torque_offset,
+                    solver_force,
+                    eq_offset,
+                    unreachable_offset,
+                }
             }
         };
         let min_normal_force = p
@@ -531,7 +653,8 @@ impl GraspModel {
             grasp_matrix: p.grasp_matrix.clone(),
             contacts: p.contacts.clone(),
             offsets,
-            weights: p.torque_weights.clone().unwrap_or_else(|| vec![1.0; m]),
+            weights,
+            passive,
             torque_limits: p.torque_limits.clone().unwrap_or_else(|| vec![None; m]),
             min_normal_force,
             joint_names,
@@ -622,13 +745,16 @@ impl GraspModel {
         }
     }
 
-    /// `f = Z1 w + Z2 τ + N ξ` into `out` (eq. 31); `xi` is empty unless the internal
-    /// forces are free.
+    /// `f = Z1 w + Z2 τ + N ξ + f_p` into `out` (eq. 31, with the passive torques'
+    /// force [`Passive::force`]); `xi` is empty unless the internal forces are free.
     pub fn forces_into(&self, w: &[f64; 6], tau: &[f64], xi: &[f64], out: &mut [f64]) {
         let n = out.len();
         let (zw, rest) = self.force_cols.split_at(6 * n);
         let (zt, passive) = rest.split_at(tau.len() * n);
-        out.fill(0.0);
+        match self.passive.force.as_slice() {
+            [] => out.fill(0.0),
+            fp => out.copy_from_slice(fp),
+        }
         add_columns(out, zw, w, 1.0);
         add_columns(out, zt, tau, 1.0);
         if !xi.is_empty() {
@@ -644,7 +770,9 @@ impl GraspModel {
         (0..self.force_dim())
             .filter(|&j| a[j] != 0.0)
             .map(|j| {
-                let mut t = abs_dot(self.z1.row(j), w) + abs_dot(self.z2.row(j), tau);
+                let mut t = abs_dot(self.z1.row(j), w)
+                    + abs_dot(self.z2.row(j), tau)
+                    + self.passive.force.get(j).map_or(0.0, |v| v.abs());
                 if !xi.is_empty() {
                     t += abs_dot(self.passive_basis.row(j), xi);
                 }
@@ -666,8 +794,9 @@ impl GraspModel {
     /// equilibrated wrench units (0 in the paper model).
     pub fn unreachable_residual(&self, w: &[f64; 6]) -> f64 {
         let ws = self.scaled_wrench(w);
+        let offset = |i: usize| self.passive.unreachable_offset.get(i).copied();
         (0..self.unreachable.nrows())
-            .map(|i| dot(self.unreachable.row(i), &ws).abs())
+            .map(|i| (dot(self.unreachable.row(i), &ws) + offset(i).unwrap_or(0.0)).abs())
             .fold(0.0, f64::max)
     }
 
@@ -675,6 +804,16 @@ impl GraspModel {
     /// values below `rank_tolerance` as zero, so `e` may be off by as much, relative to
     /// the equilibrated wrench.
     pub fn unreachable_tolerance(&self, w: &[f64; 6]) -> f64 {
-        10.0 * self.rank_tolerance * norm_inf(&self.scaled_wrench(w)).max(f64::MIN_POSITIVE)
+        // The passive targets enter as equilibrated as the wrench.
+        let passive = self
+            .passive
+            .row_targets
+            .iter()
+            .zip(&self.row_scale[6..])
+            .fold(0.0f64, |a, (t, r)| a.max((t * r).abs()));
+        10.0 * self.rank_tolerance
+            * norm_inf(&self.scaled_wrench(w))
+                .max(passive)
+                .max(f64::MIN_POSITIVE)
     }
 }

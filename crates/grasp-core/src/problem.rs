@@ -95,6 +95,11 @@ pub struct GraspProblem {
     /// Actuators that drive the joints (`τ = T u`); `None` means one per joint
     /// (`T = I`). With it, the weights, limits and initial torque are per actuator.
     pub transmission: Option<Transmission>,
+    /// Joint torques no actuator controls, per joint (rows of `jacobian_transpose`):
+    /// springs on joints and tendons, or gravity on the fingers (MuJoCo's
+    /// `qfrc_spring`, `−qfrc_bias`). The joints then balance the contact forces with
+    /// `Jᵀ f = T u + τ_passive`, and the objective and limits stay on u. `None` is 0.
+    pub passive_torque: Option<Vec<f64>>,
 }
 
 /// How actuator forces u become joint torques: `τ = T u`.
@@ -151,6 +156,7 @@ impl GraspProblem {
             joint_names: Vec::new(),
             internal_forces: InternalForces::default(),
             transmission: None,
+            passive_torque: None,
         }
     }
 
@@ -246,6 +252,19 @@ impl GraspProblem {
         }
         if let Some(t) = &self.transmission {
             validate_transmission(t, m)?;
+        }
+        if let Some(t) = &self.passive_torque {
+            per_joint(
+                "passive_torque",
+                t.len(),
+                m,
+                "joint (rows of jacobian_transpose)",
+            )?;
+            for (j, &v) in t.iter().enumerate() {
+                if !in_domain(v) {
+                    bounded(&format!("passive_torque[{j}]"), v)?;
+                }
+            }
         }
         bounded_matrix("grasp_matrix", g)?;
         for (i, c) in self.contacts.iter().enumerate() {

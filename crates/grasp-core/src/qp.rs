@@ -435,6 +435,21 @@ fn combine(out: &mut [f64], face: &[f64], z: &[f64]) {
     }
 }
 
+/// The constant side of row k of contact ci's r rows with face `face`: the minimum
+/// normal force on the last (the normal's), less the face's share of the passive
+/// torques' force at `v = 0` ([`crate::model::Passive::solver_force`]).
+fn contact_c0(model: &GraspModel, ci: usize, k: usize, r: usize, face: &[f64]) -> f64 {
+    let fmin = if k + 1 == r {
+        model.min_normal_force[ci]
+    } else {
+        0.0
+    };
+    match model.passive.solver_force.as_slice() {
+        [] => fmin,
+        fp => fmin - dot(face, &fp[model.offsets[ci]..]),
+    }
+}
+
 /// `(S_c Z2_c, S_c N_c, S_c Z1_c)` of one contact's rows.
 fn block_rows(model: &GraspModel, ci: usize, faces: &Matrix) -> (Matrix, Matrix, Matrix) {
     let off = model.offsets[ci];
@@ -494,19 +509,16 @@ impl TorqueQp {
                     let np = &model.passive_basis.as_slice()[off * d..(off + dim) * d];
                     combine(hp.row_mut(i), &face[..dim], np);
                 }
-                c0.push(if k + 1 == r {
-                    model.min_normal_force[ci]
-                } else {
-                    0.0
-                });
+                c0.push(contact_c0(&model, ci, k, r, &face[..dim]));
                 rows.push(RowId::of_contact(ci, k, r));
             }
         }
-        // Torque limits: τ_j ≥ −τmax and −τ_j ≥ −τmax.
+        // Torque limits: τ_j ≥ −τmax and −τ_j ≥ −τmax, in the solver's v = u − u_p.
         for (j, lim) in model.torque_limits.iter().enumerate() {
             if let Some(t) = *lim {
+                let up = model.passive.torque_offset.get(j).copied().unwrap_or(0.0);
                 for upper in [false, true] {
-                    c0.push(-t);
+                    c0.push(if upper { -t + up } else { -t - up });
                     rows.push(RowId::TorqueLimit { joint: j, upper });
                 }
             }
@@ -587,8 +599,7 @@ impl TorqueQp {
         }
         self.hp = splice(&self.hp, &hp);
         self.hw = splice(&self.hw, &hw);
-        let mut c0: Vec<f64> = vec![0.0; new_rows];
-        c0[new_rows - 1] = self.model.min_normal_force[ci];
+        let c0 = (0..new_rows).map(|k| contact_c0(&self.model, ci, k, new_rows, faces.row(k)));
         self.c0.splice(start..end, c0);
         let ids = (0..new_rows).map(|k| RowId::of_contact(ci, k, new_rows));
         self.rows.splice(start..end, ids);
@@ -675,6 +686,12 @@ pub struct ForceSpaceQp {
 impl ForceSpaceQp {
     /// The baseline problem of `model` with every contact inscribed at `lin`.
     pub fn new(model: Arc<GraspModel>, lin: &Linearization) -> Result<Self, ModelError> {
+        if !model.passive.is_empty() {
+            return Err(ModelError::Unsupported {
+                formulation: "the contact-force baseline",
+                what: "passive joint torques",
+            });
+        }
         let n = model.force_dim();
         let mut h_rows = Vec::new();
         let mut c0 = Vec::new();

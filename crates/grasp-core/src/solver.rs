@@ -234,7 +234,7 @@ impl WorstRatio {
 fn cone_rows<const D: usize>(
     faces: &[f64],
     fc: &[f64],
-    c0: &[f64],
+    fmin: f64,
     tol: f64,
     fscale: f64,
     viol: &mut f64,
@@ -243,7 +243,10 @@ fn cone_rows<const D: usize>(
         .try_into()
         .expect("contact force of its model's dimension");
     let mut bad = false;
-    for (s, &c) in faces.chunks_exact(D).zip(c0) {
+    let rows = faces.len() / D;
+    // Every row's constant is 0 but the last's (the normal's): fz ≥ f_min.
+    for (k, s) in faces.chunks_exact(D).enumerate() {
+        let c = if k + 1 == rows { fmin } else { 0.0 };
         let sf = if D == 4 {
             (s[0] * fc[0] + s[1] * fc[1]) + (s[2] * fc[2] + s[3] * fc[3])
         } else {
@@ -524,8 +527,31 @@ pub fn solve_into_with(
         out.torque.clear();
         out.iterations = 0;
         out.active_set = None;
-    } else {
+    } else if qp.model.passive.is_empty() {
         solver.solve_raw(wrench, warm, out);
+    } else {
+        // The backend's variable is v = u − u_p (model::Passive): a warm start's torque
+        // goes in shifted (in the joint torques' buffer, which the check refills), the
+        // answer comes out shifted back.
+        let offset = &qp.model.passive.torque_offset;
+        let mut shifted = std::mem::take(&mut out.joint_torque);
+        let warm = match warm.torque {
+            Some(t) => {
+                shifted.clear();
+                shifted.extend(t.iter().zip(offset).map(|(t, o)| t - o));
+                WarmStart {
+                    torque: Some(&shifted),
+                    active_set: warm.active_set,
+                }
+            }
+            None => *warm,
+        };
+        solver.solve_raw(wrench, &warm, out);
+        out.joint_torque = shifted;
+        let offset = &solver.problem().model.passive.torque_offset;
+        if out.torque.len() == offset.len() {
+            out.torque.iter_mut().zip(offset).for_each(|(t, o)| *t += o);
+        }
     }
     out.solve_time = start.map_or(Duration::ZERO, |t| t.elapsed());
     let tol = solver.residual_tolerance();
@@ -689,7 +715,7 @@ impl TorqueQp {
             .iter()
             .zip(&model.force_unit_inv)
             .fold(0.0f64, |a, (v, u)| a.max((v * u).abs()));
-        let admitted = 10.0 * model.rank_tolerance * norm_inf(&model.scaled_wrench(w));
+        let admitted = model.unreachable_tolerance(w);
         let rounding = 1e3 * f64::EPSILON * (6 + model.joints() + model.passive_dim()) as f64;
         // The rows of A = [G; E; Jᵀ] against their targets [w; 0; τ], a block of rows at
         // a time down the columns of A (no buffer as long as A).
@@ -702,10 +728,11 @@ impl TorqueQp {
             af.fill(0.0);
             add_column_block(af, &model.stacked_cols, rows, first, f, 1.0);
             for (i, &ai) in (first..).zip(af.iter()) {
+                let passive = model.passive.row_targets.get(i.wrapping_sub(6));
                 let target = match i {
                     0..6 => w[i],
-                    _ if i < 6 + k => 0.0,
-                    _ => tau[i - 6 - k],
+                    _ if i < 6 + k => passive.copied().unwrap_or(0.0),
+                    _ => tau[i - 6 - k] + passive.copied().unwrap_or(0.0),
                 };
                 let r = (ai - target).abs();
                 let ri = model.row_scale[i];
@@ -733,29 +760,33 @@ impl TorqueQp {
             Some(a) => {
                 out.joint_torque.resize(a.joints(), 0.0);
                 a.joint_torques_into(tau, &mut out.joint_torque);
-                // The user's equation, in joint space: Jᵀ f = T u, each row against its
-                // own terms (the rows above are its image under T⁺ and Q₂ᵀ).
+                // The user's equation, in joint space: Jᵀ f = T u + τ_p, each row
+                // against its own terms (the rows above are its image under T⁺ and Q₂ᵀ).
+                let tp = &model.passive.joint_torque;
                 let (mj, na) = (a.joints(), tau.len());
                 let abs_t = &a.transmission_cols[mj * na..];
-                let (mut terms, mut abs_u) = ([0.0f64; CHECK_BLOCK], [0.0f64; CHECK_BLOCK]);
+                let mut terms = [0.0f64; CHECK_BLOCK];
+                let abs_u = [norm_inf(tau); CHECK_BLOCK];
                 for first in (0..mj).step_by(CHECK_BLOCK) {
                     let len = CHECK_BLOCK.min(mj - first);
                     let jf = &mut buf[..len];
                     jf.fill(0.0);
                     add_column_block(jf, &a.joint_jacobian_cols, mj, first, f, 1.0);
-                    // |T| |u|, a block of actuators at a time.
+                    // ‖T_i‖₁ ‖u‖∞, a block of actuators at a time: the actuator forces'
+                    // scale seen through the row, as F is for the forces (|T_i| |u| was
+                    // the row's own terms, and where the largest forces are not on the
+                    // row, their rounding, at ε ‖u‖∞, failed a joint that no contact
+                    // loads).
                     let terms = &mut terms[..len];
                     terms.fill(0.0);
                     for c in (0..na).step_by(CHECK_BLOCK) {
-                        let u = &mut abs_u[..CHECK_BLOCK.min(na - c)];
-                        for (x, t) in u.iter_mut().zip(&tau[c..]) {
-                            *x = t.abs();
-                        }
+                        let u = &abs_u[..CHECK_BLOCK.min(na - c)];
                         add_column_block(terms, &abs_t[c * mj..], mj, first, u, 1.0);
                     }
                     for ((i, &ji), &tu) in (first..).zip(jf.iter()).zip(terms.iter()) {
-                        let t = out.joint_torque[i];
-                        let size = a.joint_reach[i] * fmax + tu;
+                        let p = tp.get(i).copied().unwrap_or(0.0);
+                        let t = out.joint_torque[i] + p;
+                        let size = a.joint_reach[i] * fmax + tu + p.abs();
                         let r = (ji - t).abs();
                         tres = tres.max(r);
                         let bound = (tol + rounding) * size;
@@ -780,6 +811,10 @@ impl TorqueQp {
             ce.fill(0.0);
             add_column_block(ce, &model.eq_cols, p, first, tau, 1.0);
             add_column_block(ce, &model.eq_cols[m * p..], p, first, w, 1.0);
+            // C u − e(w) = e_p with passive torques.
+            if let Some(ep) = model.passive.eq_offset.get(first..first + ce.len()) {
+                ce.iter_mut().zip(ep).for_each(|(v, e)| *v -= e);
+            }
             consistency = ce.iter().fold(consistency, |a, v| a.max(v.abs()));
         }
         d.consistency_residual = consistency;
@@ -796,10 +831,15 @@ impl TorqueQp {
         // c − H τ = fmin − S f on contact rows (S is block-diagonal: a few flops per
         // row), and the limit rows read τ directly.
         let (mut viol, mut vbad) = (0.0f64, false);
-        for (c, repr) in self.contacts.iter().zip(&self.constraints.cones) {
+        for ((ci, c), repr) in self
+            .contacts
+            .iter()
+            .enumerate()
+            .zip(&self.constraints.cones)
+        {
             let dim = c.model.dim();
             let fc = &f[c.offset..c.offset + dim];
-            let c0 = &self.c0[c.first_row..c.first_row + c.rows];
+            let fmin = model.min_normal_force[ci];
             // The exact cone's only linear row is its unit normal (fz ≥ f_min).
             let mut unit = [0.0; 4];
             let faces = match repr {
@@ -810,9 +850,9 @@ impl TorqueQp {
                 }
             };
             let bad = match dim {
-                1 => cone_rows::<1>(faces, fc, c0, tol, fscale, &mut viol),
-                3 => cone_rows::<3>(faces, fc, c0, tol, fscale, &mut viol),
-                _ => cone_rows::<4>(faces, fc, c0, tol, fscale, &mut viol),
+                1 => cone_rows::<1>(faces, fc, fmin, tol, fscale, &mut viol),
+                3 => cone_rows::<3>(faces, fc, fmin, tol, fscale, &mut viol),
+                _ => cone_rows::<4>(faces, fc, fmin, tol, fscale, &mut viol),
             };
             vbad |= bad;
         }

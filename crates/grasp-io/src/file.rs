@@ -199,6 +199,10 @@ pub struct MatrixFile {
     /// One name per column of `transmission`, echoed in reports.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub actuator_names: Option<Vec<String>>,
+    /// Joint torques no actuator controls (springs, gravity on the fingers), one per
+    /// row of `jacobian_transpose`: `Jᵀ f = T u + passive_torque`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub passive_torque: Option<Vec<f64>>,
 }
 
 impl MatrixFile {
@@ -224,6 +228,7 @@ impl MatrixFile {
                 .as_ref()
                 .filter(|t| !t.actuator_names.is_empty())
                 .map(|t| t.actuator_names.clone()),
+            passive_torque: p.passive_torque.clone(),
         }
     }
 
@@ -254,6 +259,7 @@ impl MatrixFile {
             }
             (None, None) => None,
         };
+        p.passive_torque = self.passive_torque;
         Options {
             linearization: self.linearization,
             torque_weights: self.torque_weights,

@@ -607,6 +607,16 @@ impl HandFile {
                 }
             }
         }
+        // The links spatial springs pass, posed for their lengths.
+        for sp in &robot.springs {
+            if let crate::tendon::SpringOn::Spatial(tendon) = sp.on {
+                for branch in robot.tendons[tendon].branches(robot) {
+                    for link in branch {
+                        robot.mark_ancestors(link, &mut needed);
+                    }
+                }
+            }
+        }
         let mut grasps = HandGrasps {
             robot,
             contacts,
@@ -642,6 +652,19 @@ impl HandFile {
         }
         Ok(grasps)
     }
+}
+
+/// A configuration that puts a side site inside its geom, as an error of the joint
+/// positions.
+fn inside_wrap(w: &crate::tendon::InsideWrap) -> ProblemError {
+    ProblemError::invalid(
+        "joint_positions",
+        format!(
+            "a configuration where the side site of geom `{}` is outside it (tendon `{}`: a string inside its wrapping geom is not modelled)",
+            w.geom, w.tendon
+        ),
+        "the side site inside the geom",
+    )
 }
 
 /// Checks one independent joint's position `value` (index `k` of
@@ -743,16 +766,10 @@ impl HandGrasps<'_> {
             return Ok(());
         };
         for &(c, tendon, gear) in &self.tendon_columns {
-            let (_, arms) = self.robot.tendon_moments(tendon, frames).map_err(|w| {
-                ProblemError::invalid(
-                    "joint_positions",
-                    format!(
-                        "a configuration where the side site of geom `{}` is outside it (tendon `{}`: a string inside its wrapping geom is not modelled)",
-                        w.geom, self.robot.tendons[tendon].name
-                    ),
-                    "the side site inside the geom",
-                )
-            })?;
+            let (_, arms) = self
+                .robot
+                .tendon_moments(tendon, frames)
+                .map_err(|w| inside_wrap(&w))?;
             for r in 0..t.matrix.nrows() {
                 t.matrix[(r, c)] = 0.0;
             }
@@ -762,6 +779,32 @@ impl HandGrasps<'_> {
             }
         }
         Ok(())
+    }
+
+    /// The springs' torques on the problem's joints at `q_ind` (`None` without
+    /// springs), reduced to the independent joints (`Pᵀ`) as Jᵀ is.
+    fn passive_torque(
+        &self,
+        q_ind: &[f64],
+        frames: &Pose,
+    ) -> Result<Option<Vec<f64>>, ProblemError> {
+        if self.robot.springs.is_empty() {
+            return Ok(None);
+        }
+        let full = self.robot.full_positions(q_ind);
+        let torques = self
+            .robot
+            .passive_torques(&full, frames)
+            .map_err(|w| inside_wrap(&w))?;
+        let mut out = vec![0.0; self.rows.len()];
+        for (j, tj) in torques.into_iter().enumerate() {
+            if let Some(cp) = self.robot.coupling[j] {
+                if let Some(o) = out.get_mut(self.row_of[cp.independent]) {
+                    *o += cp.multiplier * tj;
+                }
+            }
+        }
+        Ok(Some(out))
     }
 
     /// The problem without its G and Jᵀ (zero columns): its joints, actuators,
@@ -964,6 +1007,7 @@ impl HandGrasps<'_> {
         }
         let mut problem = self.template.clone();
         self.tendon_arms(&frames, &mut problem)?;
+        problem.passive_torque = self.passive_torque(q_ind, &frames)?;
         problem.grasp_matrix = g;
         problem.jacobian_transpose = jt;
         problem.validate()?;

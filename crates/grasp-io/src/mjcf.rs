@@ -28,7 +28,7 @@
 //! is read only when a spatial tendon an actuator pulls on wraps it; other elements are ignored, with one
 //! warning per element name.
 
-use crate::tendon::{PathPoint, SpatialTendon, WrapGeom, WrapShape};
+use crate::tendon::{PathPoint, SpatialTendon, Spring, SpringOn, WrapGeom, WrapShape};
 use crate::urdf::{
     line_at, nearest, newline_offsets, Actuator, Drive, Joint, JointKind, LimitSource, Robot, Site,
     MAX_DEPTH, MAX_LINKS,
@@ -582,6 +582,10 @@ struct Tree {
     ignored: BTreeSet<String>,
     /// The floating hand's body, held fixed at the reference frame.
     mount: Option<String>,
+    /// Per joint with a `springref`, its value (radians for a hinge); 0 elsewhere.
+    springref: HashMap<usize, f64>,
+    /// Joints with a spring: (joint, stiffness).
+    joint_springs: Vec<(usize, f64)>,
 }
 
 impl Tree {
@@ -739,6 +743,25 @@ impl Ctx<'_> {
                 }
             };
             let reference = to_rad(jv.leading("ref", 1)?.unwrap_or(0.0));
+            // A spring: MuJoCo's qfrc_spring = −k (q − springref).
+            let index = t.joints.len();
+            let springref = to_rad(jv.leading("springref", 1)?.unwrap_or(0.0));
+            if springref != 0.0 {
+                t.springref.insert(index, springref);
+            }
+            if let Some(k) = jv.leading("stiffness", 3)?.filter(|&k| k != 0.0) {
+                t.joint_springs.push((index, k));
+            }
+            if jv
+                .numbers("springdamper")?
+                .is_some_and(|v| v.iter().any(|&x| x != 0.0))
+            {
+                t.warnings.push(format!(
+                    "{}: {}: springdamper (a stiffness from the body's mass) is not read: no spring on this joint",
+                    self.r.files[j.file],
+                    self.r.at(j)
+                ));
+            }
             let range = jv
                 .limits("", self.c.autolimits)?
                 .map(|(a, b)| (to_rad(a), to_rad(b)));
@@ -1050,6 +1073,8 @@ impl Robot {
             warnings: Vec::new(),
             ignored,
             mount: None,
+            springref: HashMap::new(),
+            joint_springs: Vec::new(),
         };
         let world = t.add_link("world".into(), 0);
         t.body_link.insert("world".into(), world);
@@ -1103,8 +1128,20 @@ impl Robot {
                     kind: "tendon",
                     class: e.attr("class").unwrap_or("main").to_string(),
                 };
-                if v.leading("stiffness", 3)?.is_some_and(|k| k != 0.0) {
-                    springs.push(name.to_string());
+                if let Some(k) = v.leading("stiffness", 3)?.filter(|&k| k != 0.0) {
+                    let rest = match v.numbers("springlength")?.as_deref() {
+                        None => None,
+                        Some([l]) | Some([l, -1.0]) if *l == -1.0 => None,
+                        Some([l]) => Some((*l, *l)),
+                        Some([lo, hi]) if lo <= hi => Some((*lo, *hi)),
+                        Some(other) => {
+                            return Err(r.err(
+                                e,
+                                format!("springlength: expected one length or a range low ≤ high, got {other:?}"),
+                            ))
+                        }
+                    };
+                    springs.push((name.to_string(), e, k, rest));
                 }
                 match e.name.as_str() {
                     "fixed" => {
@@ -1142,12 +1179,6 @@ impl Robot {
                     }
                 }
             }
-        }
-        if !springs.is_empty() {
-            t.warnings.push(format!(
-                "{source}: the springs of tendons {} (stiffness) are not part of this quasi-static model: the torque they would give comes from the actuators, or the grasp is infeasible",
-                springs.join(", ")
-            ));
         }
         // Couplings from equalities.
         for eqs in top.iter().filter(|e| e.name == "equality") {
@@ -1361,6 +1392,62 @@ impl Robot {
         robot.sites = t.sites;
         robot.actuators = actuators;
         robot.tendons = spatial_tendons;
+        // Springs, each at rest over a range of its length in motion coordinates
+        // (q − ref); MuJoCo's default rest length is the length with every joint at its
+        // springref (qpos_spring).
+        let spring_motion: Vec<f64> = (0..robot.joints.len())
+            .map(|j| t.springref.get(&j).copied().unwrap_or(0.0) - t.reference[j])
+            .collect();
+        let mut springs_out: Vec<Spring> = t
+            .joint_springs
+            .iter()
+            .map(|&(j, k)| Spring {
+                name: robot.joints[j].name.clone(),
+                on: SpringOn::Joint(j),
+                stiffness: k,
+                rest: (spring_motion[j], spring_motion[j]),
+            })
+            .collect();
+        for (name, e, k, rest) in springs {
+            let (on, rest) = if let Some(terms) = tendons.get(&name) {
+                let at_ref: f64 = terms.iter().map(|&(j, c)| c * t.reference[j]).sum();
+                let rest = rest.map_or_else(
+                    || {
+                        let l: f64 = terms.iter().map(|&(j, c)| c * spring_motion[j]).sum();
+                        (l, l)
+                    },
+                    |(lo, hi)| (lo - at_ref, hi - at_ref),
+                );
+                (SpringOn::Fixed(terms.clone()), rest)
+            } else if let Some(tendon) = spatial.get(&name) {
+                let tendon = *tendon.as_ref().map_err(|why| {
+                    r.err(
+                        e,
+                        format!("has a spring (stiffness), but cannot be used: {why}"),
+                    )
+                })?;
+                let rest = match rest {
+                    Some(r) => r,
+                    None => {
+                        let pose = robot.pose_full(&spring_motion, |_| true);
+                        let (l, _) = robot.tendon_moments(tendon, &pose).map_err(|w| {
+                            r.err(e, format!("its rest length (every joint at its springref) puts the side site of geom `{}` inside it, which is not modelled; give springlength", w.geom))
+                        })?;
+                        (l, l)
+                    }
+                };
+                (SpringOn::Spatial(tendon), rest)
+            } else {
+                continue;
+            };
+            springs_out.push(Spring {
+                name,
+                on,
+                stiffness: k,
+                rest,
+            });
+        }
+        robot.springs = springs_out;
         Ok(robot)
     }
 }

@@ -79,6 +79,35 @@ pub struct SpatialTendon {
 pub struct InsideWrap {
     /// The wrapping geom.
     pub geom: String,
+    /// The tendon.
+    pub tendon: String,
+}
+
+/// What a spring stretches.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SpringOn {
+    /// A joint's motion (an index of [`Robot::joints`]).
+    Joint(usize),
+    /// A fixed tendon, `Σ coef · motion` over (joint, coef).
+    Fixed(Vec<(usize, f64)>),
+    /// A spatial tendon's length (an index of [`Robot::tendons`]).
+    Spatial(usize),
+}
+
+/// A linear spring (MJCF `stiffness`), as MuJoCo's `qfrc_spring`: its force is
+/// `−k (L − rest)` outside the rest range and 0 inside it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spring {
+    /// The joint's or tendon's name.
+    pub name: String,
+    /// What it stretches.
+    pub on: SpringOn,
+    /// k, force per unit length (or torque per radian).
+    pub stiffness: f64,
+    /// The rest range of L, low ≤ high, in the units of L: a joint's and a fixed
+    /// tendon's measured as their motion from the joints' references (MuJoCo's
+    /// `springref` or `springlength` less the references' part).
+    pub rest: (f64, f64),
 }
 
 impl SpatialTendon {
@@ -186,6 +215,7 @@ impl Robot {
                     match wrap(&a.0, &b.0, &frame, geom.radius, geom.shape, side.as_ref()).map_err(
                         |()| InsideWrap {
                             geom: geom.name.clone(),
+                            tendon: t.name.clone(),
                         },
                     )? {
                         None => length += scale * piece(a, b, scale, &mut arms),
@@ -201,6 +231,35 @@ impl Robot {
             }
         }
         Ok((length, joints.into_iter().zip(arms).collect()))
+    }
+
+    /// The springs' torques on every joint (one per [`Robot::joints`]) at the joints'
+    /// motion `q` ([`Robot::full_positions`]) and `pose` (which must place the links
+    /// of the spatial tendons with springs): `Σ −k (L − clamp(L, rest)) ∂L/∂q`,
+    /// MuJoCo's `qfrc_spring`.
+    pub fn passive_torques(&self, q: &[f64], pose: &Pose) -> Result<Vec<f64>, InsideWrap> {
+        let mut out = vec![0.0; self.joints.len()];
+        for s in &self.springs {
+            let stretch = |l: f64| l - l.clamp(s.rest.0, s.rest.1);
+            match &s.on {
+                SpringOn::Joint(j) => out[*j] -= s.stiffness * stretch(q[*j]),
+                SpringOn::Fixed(terms) => {
+                    let l: f64 = terms.iter().map(|&(j, c)| c * q[j]).sum();
+                    let f = -s.stiffness * stretch(l);
+                    for &(j, c) in terms {
+                        out[j] += f * c;
+                    }
+                }
+                SpringOn::Spatial(t) => {
+                    let (l, arms) = self.tendon_moments(*t, pose)?;
+                    let f = -s.stiffness * stretch(l);
+                    for (j, a) in arms {
+                        out[j] += f * a;
+                    }
+                }
+            }
+        }
+        Ok(out)
     }
 
     /// The velocity of point `p` (fixed to a link below joint `j`) per unit of `q_j`.

@@ -140,6 +140,9 @@ pub struct Robot {
     /// Spatial tendons that actuators pull on (MJCF `<tendon><spatial>`; none in a
     /// URDF).
     pub tendons: Vec<SpatialTendon>,
+    /// Springs on joints and tendons (MJCF `stiffness`; none in a URDF): the passive
+    /// torques of [`Robot::passive_torques`].
+    pub springs: Vec<crate::tendon::Spring>,
     /// Per link: the joint whose child it is (`None` for the root).
     parent_joint: Vec<Option<usize>>,
     /// Links from the root outwards: every parent comes before its children.
@@ -787,6 +790,7 @@ impl Robot {
             sites: Vec::new(),
             actuators: Vec::new(),
             tendons: Vec::new(),
+            springs: Vec::new(),
         })
     }
 
@@ -840,6 +844,7 @@ impl Robot {
             sites: Vec::new(),
             actuators: Vec::new(),
             tendons: Vec::new(),
+            springs: Vec::new(),
         })
     }
 
@@ -941,7 +946,12 @@ impl Robot {
     }
 
     fn pose_where(&self, q_ind: &[f64], needed: impl Fn(usize) -> bool) -> Pose {
-        let q = self.full_positions(q_ind);
+        self.pose_full(&self.full_positions(q_ind), needed)
+    }
+
+    /// The frames at every joint's motion `q` (one per [`Robot::joints`], couplings not
+    /// applied) of the links `needed` marks.
+    pub(crate) fn pose_full(&self, q: &[f64], needed: impl Fn(usize) -> bool) -> Pose {
         let mut links = vec![Isometry3::identity(); self.links.len()];
         let mut joints = vec![Isometry3::identity(); self.joints.len()];
         for &l in &self.order {

@@ -59,6 +59,7 @@ fn jacobians_and_transmissions_match_mujoco() {
             cases.len()
         );
         let (mut worst_j, mut worst_t, mut worst_f): (f64, f64, f64) = (0.0, 0.0, 0.0);
+        let (mut worst_p, mut with_springs) = (0.0f64, 0);
         let model = cases[0]["problem"]["hand"]["model"].as_str().unwrap();
         let robot = Robot::load(&dir.join(model)).unwrap();
         for case in cases {
@@ -131,6 +132,24 @@ fn jacobians_and_transmissions_match_mujoco() {
                 let want = oracle["actuator_limits"][aname].as_f64();
                 assert_eq!(limits[a], want, "{label}: the limit of {aname}");
             }
+            // The springs' torques (MuJoCo's qfrc_spring reduced by the couplings; none
+            // written when all are 0), each against the torques' scale.
+            let springs: BTreeMap<String, f64> =
+                serde_json::from_value(case["passive_torque"].clone()).unwrap_or_default();
+            let pscale = springs.values().fold(0.0f64, |a, v| a.max(v.abs()));
+            for (j, jname) in p.joint_names.iter().enumerate() {
+                let want = springs.get(jname).copied().unwrap_or(0.0);
+                let got = p.passive_torque.as_ref().map_or(0.0, |t| t[j]);
+                let err = (got - want).abs() / pscale.max(tscale);
+                worst_p = worst_p.max(err);
+                assert!(
+                    err <= 1e-10,
+                    "{label}: passive torque on {jname} {got} vs MuJoCo {want}"
+                );
+            }
+            if !springs.is_empty() {
+                with_springs += 1;
+            }
             let g: Vec<Vec<f64>> = serde_json::from_value(case["grasp_matrix"].clone()).unwrap();
             let gscale = g.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
             for r in 0..6 {
@@ -141,7 +160,7 @@ fn jacobians_and_transmissions_match_mujoco() {
             }
         }
         eprintln!(
-            "{name}: {} configurations, worst relative error Jᵀ {worst_j:.1e}, T {worst_t:.1e}, frames {worst_f:.1e} (metres, rotation entries)",
+            "{name}: {} configurations, worst relative error Jᵀ {worst_j:.1e}, T {worst_t:.1e}, frames {worst_f:.1e} (metres, rotation entries), spring torques {worst_p:.1e} ({with_springs} configurations with springs)",
             cases.len()
         );
     }

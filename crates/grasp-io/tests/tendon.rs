@@ -121,20 +121,24 @@ fn moment_arms_are_the_derivative_of_the_length() {
 
 #[test]
 fn a_spatial_tendon_no_actuator_uses_may_be_malformed() {
-    // Only an actuator's tendon must be usable: a spring wrapped on a box is ignored.
-    let text = r#"<mujoco><worldbody><site name="s0"/><body><joint name="a"/>
+    // Only a tendon that an actuator pulls on or a spring stretches must be usable: a
+    // bare string wrapped on a box is ignored, a spring on it is a named error.
+    let text = |attrs: &str| {
+        format!(
+            r#"<mujoco><worldbody><site name="s0"/><body><joint name="a"/>
         <geom name="box" type="box" size="1 1 1"/><site name="s1" pos="1 0 0"/></body></worldbody>
-        <tendon><spatial name="spring" stiffness="10"><site site="s0"/><geom geom="box"/><site site="s1"/></spatial></tendon>
-        <actuator><motor joint="a"/></actuator></mujoco>"#;
-    let robot = Robot::parse_mjcf(text, "spring.xml", None).unwrap();
-    assert!(robot.tendons.is_empty());
+        <tendon><spatial name="string"{attrs}><site site="s0"/><geom geom="box"/><site site="s1"/></spatial></tendon>
+        <actuator><motor joint="a"/></actuator></mujoco>"#
+        )
+    };
+    let robot = Robot::parse_mjcf(&text(""), "string.xml", None).unwrap();
+    assert!(robot.tendons.is_empty() && robot.springs.is_empty());
+    let err = Robot::parse_mjcf(&text(r#" stiffness="10""#), "spring.xml", None).unwrap_err();
+    let msg = err.to_string();
     assert!(
-        robot
-            .warnings
-            .iter()
-            .any(|w| w.contains("the springs of tendons spring")),
-        "{:?}",
-        robot.warnings
+        msg.contains("<spatial> (line 3): has a spring (stiffness), but cannot be used")
+            && msg.contains("a tendon wraps spheres and cylinders only"),
+        "{msg}"
     );
 }
 

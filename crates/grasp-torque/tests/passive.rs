@@ -1,0 +1,428 @@
+//! Passive joint torques (`Jᵀ f = T u + τ_p`: springs, gravity on the fingers) against
+//! an independent formulation: Clarabel on the SOCP in the contact forces and actuator
+//! forces themselves, `min Σ w u²` subject to `G f = w`, `Jᵀ f − T u = τ_p`, the exact
+//! cones, the minimum normal forces and the limits, which uses none of the model's
+//! pseudo-inverse, consistency rows or shifts. On grasps whose `[G; Jᵀ]` has no null
+//! space the contact forces are then the model's, whatever its internal-force choice.
+#![cfg(all(feature = "clarabel", feature = "active-set"))]
+
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+};
+use grasp_testkit::{synthetic_grasp, Rng, SynthSpec};
+use grasp_torque::matrix::{norm_inf, Matrix};
+use grasp_torque::problem::Transmission;
+use grasp_torque::{
+    Backend, Cones, ContactModel, GraspProblem, GraspSolver, SolverConfig, Status, WarmStart,
+};
+
+mod common;
+use common::run;
+
+/// What the direct SOCP says.
+enum Direct {
+    Optimal(f64, Vec<f64>),
+    Infeasible,
+    /// Clarabel stalled short of its tolerance.
+    Unsure,
+}
+
+/// The direct SOCP's optimum `(σ, u)`, or its proof of infeasibility.
+fn direct(p: &GraspProblem) -> Direct {
+    let (n, m) = (p.force_dim(), p.joints());
+    let t = p
+        .transmission
+        .as_ref()
+        .map_or_else(|| Matrix::identity(m), |t| t.matrix.clone());
+    let a = t.ncols();
+    let nx = n + a;
+    let weights = p.torque_weights.clone().unwrap_or_else(|| vec![1.0; a]);
+    let tp = p.passive_torque.clone().unwrap_or_else(|| vec![0.0; m]);
+    let (mut ii, mut jj, mut vv, mut b) = (vec![], vec![], vec![], vec![]);
+    let mut row = 0;
+    let mut put = |r: usize, c: usize, v: f64, ii: &mut Vec<usize>, jj: &mut Vec<usize>| {
+        if v != 0.0 {
+            ii.push(r);
+            jj.push(c);
+            vv.push(v);
+        }
+    };
+    let mut cones = vec![];
+    // G f = w; Jᵀ f − T u = τ_p.
+    for i in 0..6 {
+        for c in 0..n {
+            put(row, c, p.grasp_matrix[(i, c)], &mut ii, &mut jj);
+        }
+        b.push(p.wrench[i]);
+        row += 1;
+    }
+    for i in 0..m {
+        for c in 0..n {
+            put(row, c, p.jacobian_transpose[(i, c)], &mut ii, &mut jj);
+        }
+        for c in 0..a {
+            put(row, n + c, -t[(i, c)], &mut ii, &mut jj);
+        }
+        b.push(tp[i]);
+        row += 1;
+    }
+    cones.push(SupportedConeT::ZeroConeT(6 + m));
+    // fz ≥ f_min (s = fz − f_min), |u_j| ≤ limit.
+    let (mut offsets, mut off) = (vec![], 0);
+    for c in &p.contacts {
+        offsets.push(off);
+        off += c.dim();
+    }
+    let mut linear = 0;
+    for (ci, c) in p.contacts.iter().enumerate() {
+        put(row, offsets[ci] + c.normal_index(), -1.0, &mut ii, &mut jj);
+        b.push(-p.min_normal_force.as_ref().map_or(0.0, |f| f[ci]));
+        row += 1;
+        linear += 1;
+    }
+    for (j, lim) in p.torque_limits.iter().flatten().enumerate() {
+        if let Some(l) = *lim {
+            for sign in [1.0, -1.0] {
+                put(row, n + j, sign, &mut ii, &mut jj);
+                b.push(l);
+                row += 1;
+                linear += 1;
+            }
+        }
+    }
+    cones.push(SupportedConeT::NonnegativeConeT(linear));
+    // The exact cones, s = −A f.
+    for (ci, c) in p.contacts.iter().enumerate() {
+        let o = offsets[ci];
+        let soc = |rows: &[&[(usize, f64)]],
+                   row: &mut usize,
+                   ii: &mut Vec<usize>,
+                   jj: &mut Vec<usize>,
+                   vv: &mut Vec<f64>,
+                   b: &mut Vec<f64>,
+                   cones: &mut Vec<SupportedConeT<f64>>| {
+            for r in rows {
+                for &(k, v) in *r {
+                    ii.push(*row);
+                    jj.push(o + k);
+                    vv.push(-v);
+                }
+                b.push(0.0);
+                *row += 1;
+            }
+            cones.push(SupportedConeT::SecondOrderConeT(rows.len()));
+        };
+        match *c {
+            ContactModel::Fpc => {}
+            ContactModel::Pcwf { mu } => soc(
+                &[&[(2, mu)], &[(0, 1.0)], &[(1, 1.0)]],
+                &mut row,
+                &mut ii,
+                &mut jj,
+                &mut vv,
+                &mut b,
+                &mut cones,
+            ),
+            ContactModel::SfcElliptic { mu, mu_torsion } => soc(
+                &[
+                    &[(2, 1.0)],
+                    &[(0, 1.0 / mu)],
+                    &[(1, 1.0 / mu)],
+                    &[(3, 1.0 / mu_torsion)],
+                ],
+                &mut row,
+                &mut ii,
+                &mut jj,
+                &mut vv,
+                &mut b,
+                &mut cones,
+            ),
+            ContactModel::SfcLinear { mu, mu_torsion } => {
+                for sign in [-1.0, 1.0] {
+                    soc(
+                        &[
+                            &[(2, mu), (3, sign * mu / mu_torsion)],
+                            &[(0, 1.0)],
+                            &[(1, 1.0)],
+                        ],
+                        &mut row,
+                        &mut ii,
+                        &mut jj,
+                        &mut vv,
+                        &mut b,
+                        &mut cones,
+                    );
+                }
+            }
+        }
+    }
+    let amat = CscMatrix::new_from_triplets(row, nx, ii, jj, vv);
+    // ½ xᵀ P x = Σ w u² / 2 · 2 ... P = diag(0, 2w): the objective is Σ w u².
+    let pmat = CscMatrix::new_from_triplets(
+        nx,
+        nx,
+        (n..nx).collect(),
+        (n..nx).collect(),
+        weights.iter().map(|w| 2.0 * w).collect(),
+    );
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .tol_gap_abs(1e-10)
+        .tol_gap_rel(1e-10)
+        .tol_feas(1e-10)
+        .build()
+        .unwrap();
+    let mut s = DefaultSolver::new(&pmat, &vec![0.0; nx], &amat, &b, &cones, settings).unwrap();
+    s.solve();
+    match s.solution.status {
+        SolverStatus::Solved | SolverStatus::AlmostSolved => {
+            let u = s.solution.x[n..].to_vec();
+            let sigma = u.iter().zip(&weights).map(|(u, w)| w * u * u).sum();
+            Direct::Optimal(sigma, u)
+        }
+        SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => Direct::Infeasible,
+        _ => Direct::Unsure,
+    }
+}
+
+/// A random grasp without a null space in `[G; Jᵀ]` (more joints than force
+/// components is not enough: checked), with passive torques about the size of the
+/// torques the wrench alone needs, and every other grasp underactuated.
+fn grasp(seed: u64) -> Option<GraspProblem> {
+    let mut p = synthetic_grasp(seed, &SynthSpec::default())
+        .into_problem()
+        .unwrap();
+    let a = p.grasp_matrix.vstack(&p.jacobian_transpose);
+    if grasp_torque::linalg::svd(&a).unwrap().rank(1e-9) < p.force_dim() {
+        return None;
+    }
+    let base = run(&p, Backend::ActiveSet, Cones::Linear);
+    let scale = if base.status == Status::Optimal {
+        norm_inf(&base.torque).max(1e-3)
+    } else {
+        1.0
+    };
+    let mut rng = Rng(seed ^ 0x5eed);
+    let m = p.joints();
+    p.passive_torque = Some((0..m).map(|_| scale * rng.uniform(-0.5, 0.5)).collect());
+    if seed % 2 == 1 && m > 2 {
+        // One actuator fewer than joints: a tendon over the last two joints.
+        let mut t = Matrix::zeros(m, m - 1);
+        for j in 0..m - 1 {
+            t[(j, j)] = rng.uniform(0.5, 2.0);
+        }
+        t[(m - 1, m - 2)] = rng.uniform(0.5, 2.0);
+        p.transmission = Some(Transmission {
+            matrix: t,
+            actuator_names: vec![],
+        });
+        p.torque_weights = None;
+        p.torque_limits = None;
+        p.initial_torque = None;
+    }
+    Some(p)
+}
+
+#[test]
+fn passive_torques_match_a_direct_socp() {
+    let (mut compared, mut infeasible, mut unsure, mut worst) = (0, 0, 0, 0.0f64);
+    for seed in 0..400u64 {
+        let Some(p) = grasp(seed) else { continue };
+        let want = direct(&p);
+        for backend in [Backend::Clarabel, Backend::ActiveSet] {
+            let s = run(&p, backend, Cones::Exact);
+            match &want {
+                Direct::Unsure => unsure += 1,
+                Direct::Infeasible => {
+                    assert_eq!(s.status, Status::Infeasible, "seed {seed} {backend:?}");
+                    infeasible += 1;
+                }
+                // Clarabel may stop short of its tolerance (as on the same grasps
+                // without passive torques): that answer is not compared.
+                Direct::Optimal(..)
+                    if backend == Backend::Clarabel && s.status == Status::AlmostOptimal =>
+                {
+                    unsure += 1
+                }
+                Direct::Optimal(sigma, u) => {
+                    assert_eq!(
+                        s.status,
+                        Status::Optimal,
+                        "seed {seed} {backend:?}: {:?}",
+                        s.reason
+                    );
+                    let rel = (s.objective - sigma).abs() / sigma.max(f64::MIN_POSITIVE);
+                    worst = worst.max(rel);
+                    assert!(
+                        rel <= 1e-7,
+                        "seed {seed} {backend:?}: σ {} vs {sigma} ({rel:.1e})",
+                        s.objective
+                    );
+                    let du = s
+                        .torque
+                        .iter()
+                        .zip(u)
+                        .map(|(a, b)| (a - b).abs())
+                        .fold(0.0, f64::max);
+                    assert!(
+                        du <= 1e-4 * norm_inf(u).max(1e-12),
+                        "seed {seed} {backend:?}: u off by {du:e}"
+                    );
+                    compared += 1;
+                }
+            }
+        }
+    }
+    eprintln!("{compared} optimal answers against the direct SOCP (worst σ {worst:.1e}), {infeasible} infeasible on both, {unsure} where the direct SOCP stalled");
+    assert!(
+        compared >= 200 && infeasible >= 10 && unsure * 20 <= compared,
+        "{compared} compared, {infeasible} infeasible, {unsure} stalled"
+    );
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
+}
+
+fn solver(
+    p: &GraspProblem,
+    backend: Backend,
+    cones: Cones,
+    check: grasp_torque::Check,
+) -> GraspSolver {
+    let config = SolverConfig {
+        backend: Some(backend),
+        cones,
+        check,
+        ..Default::default()
+    };
+    GraspSolver::new(p, &config).unwrap()
+}
+
+/// The linearised cones on both backends, and the control loop: `resolve` after 1 %
+/// wrench changes (its warm start's torque goes in less the offset) equals a cold
+/// solve, with the full and the lazy check.
+#[test]
+fn passive_torques_agree_across_backends_and_warm_starts() {
+    let (mut compared, mut warm_checked) = (0, 0);
+    for seed in 0..120u64 {
+        let Some(p) = grasp(seed) else { continue };
+        let native = run(&p, Backend::ActiveSet, Cones::Linear);
+        let clarabel = run(&p, Backend::Clarabel, Cones::Linear);
+        if clarabel.status == Status::AlmostOptimal {
+            continue;
+        }
+        assert_eq!(native.status, clarabel.status, "seed {seed}");
+        if native.status != Status::Optimal {
+            continue;
+        }
+        assert!(
+            rel(native.objective, clarabel.objective) <= 1e-7,
+            "seed {seed}: σ {} vs {}",
+            native.objective,
+            clarabel.objective
+        );
+        compared += 1;
+        for cones in [Cones::Linear, Cones::Exact] {
+            for check in [grasp_torque::Check::Full, grasp_torque::Check::Lazy] {
+                let mut hot = solver(&p, Backend::ActiveSet, cones, check);
+                let mut cold = solver(&p, Backend::ActiveSet, cones, grasp_torque::Check::Full);
+                let mut rng = Rng(seed);
+                for step in 0..6 {
+                    let w: [f64; 6] = std::array::from_fn(|i| {
+                        p.wrench[i]
+                            * (1.0
+                                + if step == 0 {
+                                    0.0
+                                } else {
+                                    0.01 * rng.uniform(-1.0, 1.0)
+                                })
+                    });
+                    let got = hot.resolve(&w).unwrap().clone();
+                    let want = cold.solve(&w, &WarmStart::default()).unwrap();
+                    assert_eq!(
+                        got.status, want.status,
+                        "seed {seed} {cones:?} {check:?} step {step}"
+                    );
+                    if want.status == Status::Optimal {
+                        let d = got
+                            .torque
+                            .iter()
+                            .zip(&want.torque)
+                            .map(|(a, b)| (a - b).abs())
+                            .fold(0.0, f64::max);
+                        assert!(
+                            d <= 1e-7 * norm_inf(&want.torque).max(1e-12),
+                            "seed {seed} {cones:?} {check:?} step {step}: {d:e}"
+                        );
+                        let full = hot.diagnose();
+                        assert_eq!(
+                            full.status,
+                            Status::Optimal,
+                            "seed {seed}: {:?}",
+                            full.reason
+                        );
+                        warm_checked += 1;
+                    }
+                }
+            }
+        }
+    }
+    eprintln!(
+        "{compared} grasps agree across backends, {warm_checked} warm re-solves equal cold ones"
+    );
+    assert!(
+        compared >= 40 && warm_checked >= 400,
+        "{compared}, {warm_checked}"
+    );
+}
+
+/// No passive torque and zero passive torques give the same answer, and scaling the
+/// wrench and the passive torques together scales the actuator forces (the problem is
+/// homogeneous in (w, τ_p, f_min, limits)).
+#[test]
+fn zero_passive_torques_change_nothing_and_the_problem_is_homogeneous() {
+    let mut checked = 0;
+    for seed in 0..60u64 {
+        let Some(p) = grasp(seed) else { continue };
+        let mut zero = p.clone();
+        zero.passive_torque = Some(vec![0.0; p.joints()]);
+        let mut none = p.clone();
+        none.passive_torque = None;
+        for cones in [Cones::Linear, Cones::Exact] {
+            let (a, b) = (
+                run(&zero, Backend::ActiveSet, cones),
+                run(&none, Backend::ActiveSet, cones),
+            );
+            assert_eq!(a.status, b.status);
+            assert_eq!(a.torque, b.torque, "seed {seed} {cones:?}");
+            let s = run(&p, Backend::ActiveSet, cones);
+            let mut scaled = p.clone();
+            let k = 37.5;
+            scaled.wrench.iter_mut().for_each(|v| *v *= k);
+            scaled
+                .passive_torque
+                .as_mut()
+                .unwrap()
+                .iter_mut()
+                .for_each(|v| *v *= k);
+            if let Some(f) = scaled.min_normal_force.as_mut() {
+                f.iter_mut().for_each(|v| *v *= k);
+            }
+            if let Some(l) = scaled.torque_limits.as_mut() {
+                l.iter_mut().flatten().for_each(|v| *v *= k);
+            }
+            let t = run(&scaled, Backend::ActiveSet, cones);
+            assert_eq!(s.status, t.status, "seed {seed} {cones:?}");
+            if s.status == Status::Optimal {
+                assert!(
+                    rel(t.objective, k * k * s.objective) <= 1e-9,
+                    "seed {seed} {cones:?}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked >= 20, "{checked}");
+}
