@@ -92,69 +92,38 @@ fn direct(p: &GraspProblem) -> Direct {
         }
     }
     cones.push(SupportedConeT::NonnegativeConeT(linear));
-    // The exact cones, s = −A f.
+    // The exact cones, s = −A f: per contact, its second-order cones' rows, each a
+    // list of (force component, coefficient).
     for (ci, c) in p.contacts.iter().enumerate() {
-        let o = offsets[ci];
-        let soc = |rows: &[&[(usize, f64)]],
-                   row: &mut usize,
-                   ii: &mut Vec<usize>,
-                   jj: &mut Vec<usize>,
-                   vv: &mut Vec<f64>,
-                   b: &mut Vec<f64>,
-                   cones: &mut Vec<SupportedConeT<f64>>| {
-            for r in rows {
-                for &(k, v) in *r {
-                    ii.push(*row);
-                    jj.push(o + k);
-                    vv.push(-v);
+        type Row = Vec<(usize, f64)>;
+        let socs: Vec<Vec<Row>> = match *c {
+            ContactModel::Fpc => vec![],
+            ContactModel::Pcwf { mu } => vec![vec![vec![(2, mu)], vec![(0, 1.0)], vec![(1, 1.0)]]],
+            ContactModel::SfcElliptic { mu, mu_torsion } => vec![vec![
+                vec![(2, 1.0)],
+                vec![(0, 1.0 / mu)],
+                vec![(1, 1.0 / mu)],
+                vec![(3, 1.0 / mu_torsion)],
+            ]],
+            ContactModel::SfcLinear { mu, mu_torsion } => [-1.0, 1.0]
+                .map(|sign| {
+                    vec![
+                        vec![(2, mu), (3, sign * mu / mu_torsion)],
+                        vec![(0, 1.0)],
+                        vec![(1, 1.0)],
+                    ]
+                })
+                .to_vec(),
+        };
+        for soc in socs {
+            for r in &soc {
+                for &(k, v) in r {
+                    put(row, offsets[ci] + k, -v, &mut ii, &mut jj);
                 }
                 b.push(0.0);
-                *row += 1;
+                row += 1;
             }
-            cones.push(SupportedConeT::SecondOrderConeT(rows.len()));
-        };
-        match *c {
-            ContactModel::Fpc => {}
-            ContactModel::Pcwf { mu } => soc(
-                &[&[(2, mu)], &[(0, 1.0)], &[(1, 1.0)]],
-                &mut row,
-                &mut ii,
-                &mut jj,
-                &mut vv,
-                &mut b,
-                &mut cones,
-            ),
-            ContactModel::SfcElliptic { mu, mu_torsion } => soc(
-                &[
-                    &[(2, 1.0)],
-                    &[(0, 1.0 / mu)],
-                    &[(1, 1.0 / mu)],
-                    &[(3, 1.0 / mu_torsion)],
-                ],
-                &mut row,
-                &mut ii,
-                &mut jj,
-                &mut vv,
-                &mut b,
-                &mut cones,
-            ),
-            ContactModel::SfcLinear { mu, mu_torsion } => {
-                for sign in [-1.0, 1.0] {
-                    soc(
-                        &[
-                            &[(2, mu), (3, sign * mu / mu_torsion)],
-                            &[(0, 1.0)],
-                            &[(1, 1.0)],
-                        ],
-                        &mut row,
-                        &mut ii,
-                        &mut jj,
-                        &mut vv,
-                        &mut b,
-                        &mut cones,
-                    );
-                }
-            }
+            cones.push(SupportedConeT::SecondOrderConeT(soc.len()));
         }
     }
     let amat = CscMatrix::new_from_triplets(row, nx, ii, jj, vv);
