@@ -258,7 +258,8 @@ pub fn reference_geometry(geometry: &serde_json::Value) -> grasp_core::GraspProb
 /// The same problem with lengths multiplied by `l` (m → mm: 1000) and forces by `f`
 /// (N → mN: 1000): the moment rows of G and the wrench, every row of Jᵀ (each torque
 /// scales by `l·f`, as for revolute joints), the `mz` columns, `mu_torsion`, the
-/// minimum normal forces and the torque limits. σ scales by `(l f)²` exactly.
+/// minimum normal forces, the torque limits and the passive torques. σ scales by
+/// `(l f)²` exactly.
 pub fn rescale(p: &grasp_core::GraspProblem, l: f64, f: f64) -> grasp_core::GraspProblem {
     let mut q = p.clone();
     let mut mz_cols = Vec::new();
@@ -291,6 +292,9 @@ pub fn rescale(p: &grasp_core::GraspProblem, l: f64, f: f64) -> grasp_core::Gras
     }
     if let Some(lim) = &mut q.torque_limits {
         lim.iter_mut().flatten().for_each(|v| *v *= l * f);
+    }
+    if let Some(tp) = &mut q.passive_torque {
+        tp.iter_mut().for_each(|v| *v *= l * f);
     }
     q
 }

@@ -10,7 +10,7 @@ use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
 };
-use grasp_testkit::{synthetic_grasp, Rng, SynthSpec};
+use grasp_testkit::{rescale, synthetic_grasp, Rng, SynthSpec};
 use grasp_torque::matrix::{norm_inf, Matrix};
 use grasp_torque::problem::Transmission;
 use grasp_torque::{
@@ -394,4 +394,50 @@ fn zero_passive_torques_change_nothing_and_the_problem_is_homogeneous() {
         }
     }
     assert!(checked >= 20, "{checked}");
+}
+
+/// The same grasps in other units (metres to millimetres or kilometres, newtons to
+/// millinewtons or kilonewtons, passive torques with the other torques): the same
+/// status, and σ scaled by `(l f)²`, on both cone forms and both backends.
+#[test]
+fn passive_torques_are_the_same_in_any_units() {
+    let mut checked = 0;
+    for seed in 0..60u64 {
+        let Some(p) = grasp(seed) else { continue };
+        for cones in [Cones::Linear, Cones::Exact] {
+            for backend in [Backend::ActiveSet, Backend::Clarabel] {
+                let s = run(&p, backend, cones);
+                if !matches!(s.status, Status::Optimal | Status::Infeasible) {
+                    continue;
+                }
+                for (l, f) in [(1e3, 1e-3), (1e-3, 1e4), (1e3, 1e3)] {
+                    let t = run(&rescale(&p, l, f), backend, cones);
+                    if backend == Backend::Clarabel && t.status == Status::AlmostOptimal {
+                        continue;
+                    }
+                    assert_eq!(
+                        s.status, t.status,
+                        "seed {seed} {backend:?} {cones:?} l {l} f {f}"
+                    );
+                    if s.status == Status::Optimal {
+                        let tol = if backend == Backend::Clarabel {
+                            1e-6
+                        } else {
+                            1e-9
+                        };
+                        let k = (l * f) * (l * f);
+                        assert!(
+                            rel(t.objective, k * s.objective) <= tol,
+                            "seed {seed} {backend:?} {cones:?} l {l} f {f}: σ {} vs {}",
+                            t.objective,
+                            k * s.objective
+                        );
+                        checked += 1;
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("{checked} rescaled optima agree");
+    assert!(checked >= 100, "{checked}");
 }
