@@ -235,9 +235,10 @@ pub struct ActuatorSpace {
     pub unactuated_directions: Matrix,
     /// Jᵀ in joint space, column-major (m rows), for the residual check.
     pub joint_jacobian_cols: Vec<f64>,
-    /// T column-major (m rows), then `|T|` likewise: `τ = T u` and the size of its
-    /// terms `|T| |u|`, for the residual check.
+    /// T column-major (m rows): `τ = T u`, for the residual check.
     pub transmission_cols: Vec<f64>,
+    /// Per joint, `‖T_i‖₁`: the residual check judges row i against `‖T_i‖₁ ‖u‖∞`.
+    pub transmission_reach: Vec<f64>,
     /// Per joint, `Σ_j |Jᵀ_ij| · force_unit_j` (as [`GraspModel::row_reach`]).
     pub joint_reach: Vec<f64>,
 }
@@ -338,14 +339,10 @@ fn actuator_space(p: &GraspProblem, rank_tolerance: f64) -> Result<ActuatorRows,
         Some(ActuatorSpace {
             transmission: tm.clone(),
             joint_jacobian_cols: column_major(m, n, |i, j| p.jacobian_transpose[(i, j)]),
-            transmission_cols: column_major(m, 2 * a, |i, j| {
-                let v = tm[(i, j % a)];
-                if j < a {
-                    v
-                } else {
-                    v.abs()
-                }
-            }),
+            transmission_cols: column_major(m, a, |i, j| tm[(i, j)]),
+            transmission_reach: (0..m)
+                .map(|i| tm.row(i).iter().map(|v| v.abs()).sum())
+                .collect(),
             joint_jacobian_transpose: p.jacobian_transpose.clone(),
             joint_names: p.joint_names.clone(),
             unactuated_directions: q2t,

@@ -717,8 +717,9 @@ impl TorqueQp {
             .fold(0.0f64, |a, (v, u)| a.max((v * u).abs()));
         let admitted = model.unreachable_tolerance(w);
         let rounding = 1e3 * f64::EPSILON * (6 + model.joints() + model.passive_dim()) as f64;
-        // The rows of A = [G; E; Jᵀ] against their targets [w; 0; τ], a block of rows at
-        // a time down the columns of A (no buffer as long as A).
+        // The rows of A = [G; E; Jᵀ] against their targets [w; Q₂ᵀ τ_p; τ + T⁺ τ_p]
+        // (model::Passive), a block of rows at a time down the columns of A (no buffer
+        // as long as A).
         let (mut wres, mut wbad, mut wratio) = (0.0f64, false, WorstRatio::NONE);
         let (mut tres, mut tbad, mut tratio) = (0.0f64, false, WorstRatio::NONE);
         let (k, rows) = (model.unactuated.nrows(), model.row_scale.len());
@@ -760,30 +761,23 @@ impl TorqueQp {
             Some(a) => {
                 out.joint_torque.resize(a.joints(), 0.0);
                 a.joint_torques_into(tau, &mut out.joint_torque);
-                // The user's equation, in joint space: Jᵀ f = T u + τ_p, each row
-                // against its own terms (the rows above are its image under T⁺ and Q₂ᵀ).
+                // The user's equation, in joint space: Jᵀ f = T u + τ_p (the rows above
+                // are its image under T⁺ and Q₂ᵀ), each row against the forces' and the
+                // actuator forces' scales seen through it, `reach · F + ‖T_i‖₁ ‖u‖∞`
+                // (the row's own terms |T_i| |u| were rounding on a joint no contact
+                // loads whose actuators also drive loaded fingers, and the answer's
+                // rounding, at ε ‖u‖∞, failed it).
                 let tp = &model.passive.joint_torque;
-                let (mj, na) = (a.joints(), tau.len());
-                let abs_t = &a.transmission_cols[mj * na..];
-                let mut terms = [0.0f64; CHECK_BLOCK];
-                let abs_u = [norm_inf(tau); CHECK_BLOCK];
-                for first in (0..mj).step_by(CHECK_BLOCK) {
-                    let len = CHECK_BLOCK.min(mj - first);
+                let umax = norm_inf(tau);
+                for first in (0..a.joints()).step_by(CHECK_BLOCK) {
+                    let len = CHECK_BLOCK.min(a.joints() - first);
                     let jf = &mut buf[..len];
                     jf.fill(0.0);
-                    add_column_block(jf, &a.joint_jacobian_cols, mj, first, f, 1.0);
-                    // ‖T_i‖₁ ‖u‖∞, a block of actuators at a time: the actuator forces'
-                    // scale seen through the row, as F is for the forces (|T_i| |u| was
-                    // the row's own terms, and where the largest forces are not on the
-                    // row, their rounding, at ε ‖u‖∞, failed a joint that no contact
-                    // loads).
-                    let terms = &mut terms[..len];
-                    terms.fill(0.0);
-                    for c in (0..na).step_by(CHECK_BLOCK) {
-                        let u = &abs_u[..CHECK_BLOCK.min(na - c)];
-                        add_column_block(terms, &abs_t[c * mj..], mj, first, u, 1.0);
-                    }
-                    for ((i, &ji), &tu) in (first..).zip(jf.iter()).zip(terms.iter()) {
+                    add_column_block(jf, &a.joint_jacobian_cols, a.joints(), first, f, 1.0);
+                    let terms = a.transmission_reach[first..first + len]
+                        .iter()
+                        .map(|t| t * umax);
+                    for ((i, &ji), tu) in (first..).zip(jf.iter()).zip(terms) {
                         let p = tp.get(i).copied().unwrap_or(0.0);
                         let t = out.joint_torque[i] + p;
                         let size = a.joint_reach[i] * fmax + tu + p.abs();
