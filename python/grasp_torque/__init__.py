@@ -226,7 +226,8 @@ class Problem:
         ``torque_limits`` (``None`` or ``inf`` for a joint without one),
         ``min_normal_force``, ``joint_names``, ``linearization``, ``internal_forces``,
         ``initial_torque``, ``transmission`` (m × a: τ = T u, the solve then returns
-        actuator forces u), ``actuator_names``)."""
+        actuator forces u), ``actuator_names``, ``passive_torque`` (m: the joints'
+        spring or weight torques, ``Jᵀ f = T u + passive_torque``))."""
         d = {
             "grasp_matrix": _real("grasp_matrix", grasp_matrix),
             "jacobian_transpose": _real("jacobian_transpose", jacobian_transpose),
@@ -447,6 +448,7 @@ def solve_batch(
     joint_names: Optional[Sequence[str]] = None,
     transmission=None,
     actuator_names: Optional[Sequence[str]] = None,
+    passive_torque=None,
     threads: Optional[int] = None,
     warm_start: bool = True,
     torque: Optional[np.ndarray] = None,
@@ -460,10 +462,13 @@ def solve_batch(
     and ``W[B,K,6]`` K of them (each grasp's model is built once and its wrenches are
     solved in order, each warm-started from the previous answer unless
     ``warm_start=False``). ``contacts``, the limits (``None`` or ``inf`` for a joint
-    without one), weights and minimum normal forces are shared by every grasp. ``threads`` defaults to one per core. A
-    ``transmission`` T (m × a, shared: an MJCF hand's moment arms do not depend on the
-    configuration) makes the outputs actuator forces u, ``torque[B,(K,)a]``, with the
-    weights and limits per actuator.
+    without one), weights and minimum normal forces are shared by every grasp. ``threads``
+    defaults to one per core. A ``transmission`` T (``[m, a]`` shared, or ``[B, m, a]``
+    per grasp, as a spatial tendon's moment arms change with the configuration) makes the
+    outputs actuator forces u, ``torque[B,(K,)a]``, with the weights and limits per
+    actuator. ``passive_torque`` (``[m]`` for every grasp or
+    ``[B, m]``, one per row of JT) is the joints' passive torques, springs or the
+    fingers' weight: then ``Jᵀ f = T u + passive_torque``.
 
     As in ``mujoco.rollout``, the outputs ``torque``, ``objective``,
     ``wrench_residual`` (float64) and ``status`` (int8) may be passed preallocated
@@ -478,13 +483,26 @@ def solve_batch(
         raise ValueError(f"JT: expected shape (B, m, n), got {JT.shape}")
     W3, single = _wrenches(W)
     B, K, m = G.shape[0], W3.shape[1], JT.shape[1]
+    per_grasp = None
     if transmission is not None:
         transmission = _real("transmission", transmission)
-        if transmission.ndim != 2 or transmission.shape[0] != m:
+        shared = transmission.ndim == 2 and transmission.shape[0] == m
+        if not shared and not (transmission.ndim == 3 and transmission.shape[:2] == (B, m)):
             raise ValueError(
-                f"transmission: expected shape ({m}, a), one row per joint of JT, got {transmission.shape}"
+                f"transmission: expected shape ({m}, a) or ({B}, {m}, a), one row per joint of JT, got {transmission.shape}"
             )
-        m = transmission.shape[1]
+        if not shared:
+            per_grasp, transmission = transmission, None
+        m = (transmission if shared else per_grasp).shape[-1]
+    if passive_torque is not None:
+        passive_torque = _real("passive_torque", passive_torque)
+        if passive_torque.ndim not in (1, 2) or passive_torque.shape[-1] != JT.shape[1]:
+            raise ValueError(
+                f"passive_torque: expected shape ({JT.shape[1]},) or ({B}, {JT.shape[1]}), one per row of JT, got {passive_torque.shape}"
+            )
+        if passive_torque.ndim == 1:
+            passive_torque = np.broadcast_to(passive_torque, (B,) + passive_torque.shape)
+        passive_torque = np.ascontiguousarray(passive_torque)
     outs = _outputs((B,) if single else (B, K), m, torque, objective, wrench_residual, status)
     spec = {
         "contacts": _contacts(contacts),
@@ -501,6 +519,8 @@ def solve_batch(
         G,
         JT,
         W3,
+        passive_torque,
+        per_grasp,
         _dumps(spec),
         _dumps(settings),
         threads,
@@ -518,11 +538,16 @@ actuators, the actuators) of ``torque``'s last axis, in order."""
 
 
 HandArrays = namedtuple(
-    "HandArrays", ["G", "JT", "transmission", "joint_names", "actuator_names", "errors"]
+    "HandArrays",
+    ["G", "JT", "transmission", "joint_names", "actuator_names", "errors", "passive_torque"],
 )
 HandArrays.__doc__ = """What ``Hand.arrays`` builds: ``G[B,6,n]`` and ``JT[B,m,n]`` per grasp
-(NaN for a rejected one), the transmission ``T[m,a]`` of an MJCF hand with actuators
-(else None), the names of JT's rows and T's columns, and ``errors``: ``{b: message}``."""
+(NaN for a rejected one), the transmission of an MJCF hand with actuators (else None):
+``T[m,a]``, or ``T[B,m,a]`` per grasp when spatial tendons drive it (their moment arms
+change with the configuration), the names of JT's rows and T's columns, ``errors``: ``{b: message}``, and
+``passive_torque[B,m]``: the springs' torques on JT's rows at each configuration
+(MuJoCo's ``qfrc_spring``; zero for a hand without springs), which ``solve_batch``
+takes as ``passive_torque`` to solve what ``Hand.solve_batch`` solves."""
 
 
 class Hand:
@@ -629,8 +654,8 @@ class Hand:
     def arrays(
         self, joint_positions, contacts: Sequence[Mapping], *, positions=None, normals=None, object_pose=None
     ) -> HandArrays:
-        """Each grasp's G and Jᵀ (as ``solve_batch`` poses them, same arguments), for
-        ``gt.solve_batch``, another solver or a grasp-quality measure. G's columns are
+        """Each grasp's G, Jᵀ and spring torques (as ``solve_batch`` poses them, same
+        arguments), for ``gt.solve_batch``, another solver or a grasp-quality measure. G's columns are
         the contacts' force components in their frames (``docs/geometry.md``), in the
         object frame about its origin; JT's rows are ``joint_names``."""
         q, P, N, pose = self._poses(joint_positions, positions, normals, object_pose)
@@ -639,9 +664,12 @@ class Hand:
         B, n, m = q.shape[0], d["force_dim"], len(d["joint_names"])
         G = np.empty((B, 6, n))
         JT = np.empty((B, m, n))
-        errors = self._native.arrays(q, P, N, pose, spec_json, G, JT)
+        TP = np.empty((B, m))
         T = None if d["transmission"] is None else np.array(d["transmission"], dtype=np.float64)
-        return HandArrays(G, JT, T, d["joint_names"], d["actuator_names"], dict(errors))
+        T3 = np.empty((B,) + T.shape) if d["transmission_varies"] else None
+        errors = self._native.arrays(q, P, N, pose, spec_json, G, JT, TP, T3)
+        T = T if T3 is None else T3
+        return HandArrays(G, JT, T, d["joint_names"], d["actuator_names"], dict(errors), TP)
 
     def solve_batch(
         self,

@@ -565,6 +565,10 @@ struct Arrays<'a> {
     jt: ArrayView3<'a, f64>,
     /// `[B, K, 6]` (K = 1 for `[B, 6]`).
     w: ArrayView3<'a, f64>,
+    /// `[B, m]`: each grasp's passive joint torques, if given.
+    passive: Option<ArrayView2<'a, f64>>,
+    /// `[B, m, a]`: each grasp's transmission, if it varies.
+    transmissions: Option<ArrayView3<'a, f64>>,
     /// Everything but G, Jᵀ and the wrench, with the settings' overrides applied.
     template: GraspProblem,
 }
@@ -584,6 +588,10 @@ impl BatchSource for Arrays<'_> {
         let mut p = self.template.clone();
         p.grasp_matrix = to_matrix(g);
         p.jacobian_transpose = to_matrix(jt);
+        p.passive_torque = self.passive.map(|t| t.row(b).to_vec());
+        if let (Some(t), Some(tr)) = (&self.transmissions, p.transmission.as_mut()) {
+            tr.matrix = to_matrix(t.index_axis(Axis(0), b));
+        }
         // Each wrench is checked when it is solved: a bad first wrench fails only itself.
         p.wrench = [0.0; 6];
         Ok(Cow::Owned(p))
@@ -696,6 +704,8 @@ fn solve_batch(
     g: PyReadonlyArray3<'_, f64>,
     jt: PyReadonlyArray3<'_, f64>,
     w: PyReadonlyArray3<'_, f64>,
+    passive: Option<PyReadonlyArray2<'_, f64>>,
+    transmissions: Option<PyReadonlyArray3<'_, f64>>,
     spec_json: &str,
     settings_json: &str,
     threads: usize,
@@ -724,6 +734,33 @@ fn solve_batch(
         )));
     }
     let k = wrench_count(&wv, b)?;
+    let passive = passive.as_ref().map(|t| t.as_array());
+    if let Some(t) = &passive {
+        if t.dim() != (b, m) {
+            return Err(invalid(format!(
+                "passive_torque: expected shape ({m},) or ({b}, {m}), one per row of JT, got {:?}",
+                t.shape()
+            )));
+        }
+    }
+    let transmissions = transmissions.as_ref().map(|t| t.as_array());
+    let mut shared_transmission = spec.transmission;
+    if let Some(t) = &transmissions {
+        let (bt, mt, a) = t.dim();
+        if bt != b || mt != m || shared_transmission.is_some() {
+            return Err(invalid(format!(
+                "transmission: expected shape ({m}, a) or ({b}, {m}, a), one row per joint of JT, got {:?}",
+                t.shape()
+            )));
+        }
+        // The shared checks (shape, names) see a placeholder of T's shape; each
+        // grasp's own T is checked with its grasp.
+        shared_transmission = Some(
+            (0..m)
+                .map(|i| (0..a).map(|j| f64::from(u8::from(i == j))).collect())
+                .collect(),
+        );
+    }
     let contacts = spec
         .contacts
         .iter()
@@ -734,7 +771,7 @@ fn solve_batch(
     let mut template =
         GraspProblem::new(Matrix::zeros(6, 0), Matrix::zeros(m, 0), [0.0; 6], contacts);
     template.joint_names = spec.joint_names.unwrap_or_default();
-    if let Some(t) = spec.transmission {
+    if let Some(t) = shared_transmission {
         let cols = t.first().map_or(0, Vec::len);
         if t.len() != m || t.iter().any(|r| r.len() != cols) {
             return Err(invalid(format!(
@@ -778,6 +815,8 @@ fn solve_batch(
         g: gv,
         jt: jv,
         w: wv,
+        passive,
+        transmissions,
         template,
     };
     let options = BatchOptions {
@@ -982,7 +1021,8 @@ impl Hand {
     }
 
     /// What every grasp of a batch with these contacts shares, as JSON: the joint and
-    /// actuator names, the transmission T (joints × actuators) or null, and n.
+    /// actuator names, the transmission T (joints × actuators) or null, whether T
+    /// varies with the configuration (then each grasp has its own), and n.
     fn describe(&self, spec_json: &str) -> PyResult<String> {
         let (grasps, _) = self.grasps(from_keywords(spec_json)?, &Settings::default())?;
         let t = grasps.template();
@@ -994,12 +1034,14 @@ impl Hand {
                 (0..tr.matrix.nrows()).map(|i| tr.matrix.row(i).to_vec()).collect::<Vec<_>>()
             }),
             "force_dim": t.contacts.iter().map(|c| c.dim()).sum::<usize>(),
+            "transmission_varies": grasps.transmission_varies(),
         });
         Ok(value.to_string())
     }
 
-    /// Each grasp's G and Jᵀ, written into `g[b]` and `jt[b]` (NaN for a rejected
-    /// grasp, whose message is returned with its index).
+    /// Each grasp's G, Jᵀ and passive joint torques (the springs'; zero without
+    /// springs), written into `g[b]`, `jt[b]` and `tp[b]` (NaN for a rejected grasp,
+    /// whose message is returned with its index).
     #[allow(clippy::too_many_arguments)]
     fn arrays(
         &self,
@@ -1011,6 +1053,8 @@ impl Hand {
         spec_json: &str,
         mut g: PyReadwriteArrayDyn<'_, f64>,
         mut jt: PyReadwriteArrayDyn<'_, f64>,
+        mut tp: PyReadwriteArrayDyn<'_, f64>,
+        mut tr: Option<PyReadwriteArrayDyn<'_, f64>>,
     ) -> PyResult<Vec<(usize, String)>> {
         let (grasps, _) = self.grasps(from_keywords(spec_json)?, &Settings::default())?;
         let source = Posed::new(grasps, &q, None, &positions, &normals, &poses)?;
@@ -1025,18 +1069,39 @@ impl Hand {
         let m = source.grasps.template().joints();
         let g = contiguous_out("G", &mut g, &[b, 6, n])?;
         let jt = contiguous_out("JT", &mut jt, &[b, m, n])?;
+        let tp = contiguous_out("passive_torque", &mut tp, &[b, m])?;
+        // Each grasp's T, when it varies with the configuration.
+        let a = source.grasps.template().actuated();
+        let mut tr = match tr.as_mut() {
+            Some(t) => Some(contiguous_out("transmission", t, &[b, m, a])?),
+            None => None,
+        };
         Ok(py.detach(|| {
             let mut errors = Vec::new();
-            let blocks = g.chunks_exact_mut(6 * n).zip(jt.chunks_exact_mut(m * n));
-            for (i, (gb, jb)) in blocks.enumerate() {
+            let blocks = g
+                .chunks_exact_mut(6 * n)
+                .zip(jt.chunks_exact_mut(m * n))
+                .zip(tp.chunks_exact_mut(m));
+            for (i, ((gb, jb), tb)) in blocks.enumerate() {
                 match source.problem(i) {
                     Ok(p) => {
                         gb.copy_from_slice(p.grasp_matrix.as_slice());
                         jb.copy_from_slice(p.jacobian_transpose.as_slice());
+                        match &p.passive_torque {
+                            Some(t) => tb.copy_from_slice(t),
+                            None => tb.fill(0.0),
+                        }
+                        if let (Some(out), Some(t)) = (tr.as_deref_mut(), &p.transmission) {
+                            out[i * m * a..(i + 1) * m * a].copy_from_slice(t.matrix.as_slice());
+                        }
                     }
                     Err(e) => {
                         gb.fill(f64::NAN);
                         jb.fill(f64::NAN);
+                        tb.fill(f64::NAN);
+                        if let Some(out) = tr.as_deref_mut() {
+                            out[i * m * a..(i + 1) * m * a].fill(f64::NAN);
+                        }
                         errors.push((i, e.to_string()));
                     }
                 }

@@ -2,6 +2,7 @@
 form, and batches with a shared transmission."""
 
 import numpy as np
+import pytest
 
 import grasp_torque as gt
 
@@ -59,3 +60,25 @@ def test_identity_transmission_changes_nothing():
     b = gt.solve_batch(G, JT, W, contacts, transmission=np.eye(m), threads=1)
     np.testing.assert_array_equal(a.torque, b.torque)
     np.testing.assert_array_equal(a.status, b.status)
+
+
+def test_per_grasp_transmissions_match_one_by_one():
+    G, JT, W, contacts = _grasps(20, seed=9)
+    B, m = JT.shape[:2]
+    rng = np.random.default_rng(1)
+    # A spatial tendon's moment arms change with the configuration: one T per grasp.
+    T = np.repeat(np.eye(m)[None, :, : m - 1], B, axis=0)
+    T[:, m - 1, m - 2] = rng.uniform(0.3, 1.0, B)
+    b = gt.solve_batch(G, JT, W, contacts, transmission=T, threads=2)
+    assert b.torque.shape == (B, m - 1)
+    for i in range(B):
+        r = gt.Solver(gt.Problem.from_arrays(G[i], JT[i], contacts, W[i], transmission=T[i])).solve()
+        assert gt.STATUS_CODES[b.status[i]] == r.status
+        if r.status == "optimal":
+            np.testing.assert_array_equal(b.torque[i], r.torque)
+    T[3, 0, 0] = np.nan
+    bad = gt.solve_batch(G, JT, W, contacts, transmission=T)
+    assert set(bad.errors) == {3} and "transmission" in bad.errors[3]
+    for shape in ((B + 1, m, m - 1), (m + 1, m - 1), (B, m)):
+        with pytest.raises(ValueError, match="transmission: expected shape"):
+            gt.solve_batch(G, JT, W, contacts, transmission=np.ones(shape))

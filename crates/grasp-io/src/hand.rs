@@ -825,6 +825,12 @@ impl HandGrasps<'_> {
         self.robot
     }
 
+    /// Whether each pose has its own transmission: spatial tendons' moment arms
+    /// depend on the configuration (joint and fixed-tendon actuators' do not).
+    pub fn transmission_varies(&self) -> bool {
+        !self.tendon_columns.is_empty()
+    }
+
     /// Builds the problem of one grasp. Its joint positions are checked (finite, of
     /// magnitude at most `MAX_MAGNITUDE`; a position outside the joint's limits is not
     /// an error), its points and normals as the file's.

@@ -1,0 +1,105 @@
+"""Passive joint torques (springs, the fingers' weight) from Python: the batch's
+``passive_torque`` against one-by-one solves and the statics, and a spring hand's
+``Hand.arrays`` solved as ``Hand.solve_batch`` solves it."""
+
+import json
+
+import numpy as np
+import pytest
+
+import grasp_torque as gt
+from conftest import ROOT
+
+CONTACTS = [{"model": "pcwf", "mu": 0.8}] * 3
+
+
+@pytest.mark.parametrize("shared", [True, False])
+def test_batch_passive_torques_match_one_by_one_and_the_statics(shared):
+    G, JT, W = gt.synthetic_grasps(40, seed=11)
+    B, m = JT.shape[0], JT.shape[1]
+    rng = np.random.default_rng(2)
+    # Springs of about the torques the wrench asks for (a tenth of the weight on a
+    # 5 cm lever), per grasp or one set for all.
+    scale = 0.1 * np.abs(W[:, 2:3]) * 0.05
+    TP = rng.normal(0, 1, (m,)) * scale.mean() if shared else rng.normal(0, 1, (B, m)) * scale
+    b = gt.solve_batch(G, JT, W, CONTACTS, passive_torque=TP, threads=2)
+    none = gt.solve_batch(G, JT, W, CONTACTS, threads=2)
+    held = 0
+    for i in range(B):
+        tp = TP if shared else TP[i]
+        p = gt.Problem.from_arrays(G[i], JT[i], CONTACTS, W[i], passive_torque=tp)
+        assert p.to_dict()["passive_torque"] == list(tp)
+        r = gt.Solver(p).solve()
+        assert gt.STATUS_CODES[b.status[i]] == r.status
+        if r.status != "optimal":
+            continue
+        held += 1
+        f = r.contact_forces
+        u = r.torque
+        # The user's equations, not the solver's shifted ones: G f = w and Jᵀ f = u + τ_p.
+        size = np.abs(JT[i]).sum(axis=1).max() * np.abs(f).max() + np.abs(tp).max()
+        np.testing.assert_allclose(JT[i] @ f, u + tp, rtol=0, atol=1e-9 * size)
+        np.testing.assert_allclose(G[i] @ f, W[i], rtol=0, atol=1e-9 * np.abs(f).max() * 2)
+        np.testing.assert_allclose(b.torque[i], u, rtol=0, atol=1e-9 * np.abs(u).max())
+        # Springs change the answer: a batch without them solves another problem.
+        assert none.status[i] != b.status[i] or not np.allclose(none.torque[i], u)
+    assert held >= B // 2
+
+
+def test_zero_passive_torques_change_nothing():
+    G, JT, W = gt.synthetic_grasps(12, seed=4)
+    a = gt.solve_batch(G, JT, W, CONTACTS, threads=1)
+    z = gt.solve_batch(G, JT, W, CONTACTS, passive_torque=np.zeros(JT.shape[1]), threads=1)
+    np.testing.assert_array_equal(a.torque, z.torque)
+    np.testing.assert_array_equal(a.status, z.status)
+
+
+def test_bad_passive_torques_are_named():
+    G, JT, W = gt.synthetic_grasps(5, seed=1)
+    m = JT.shape[1]
+    for bad in (np.zeros(m + 1), np.zeros((4, m)), np.zeros((5, m, 1)), 1.0):
+        with pytest.raises(ValueError, match="passive_torque: expected shape"):
+            gt.solve_batch(G, JT, W, CONTACTS, passive_torque=bad)
+    with pytest.raises(ValueError, match="passive_torque: expected real numbers"):
+        gt.solve_batch(G, JT, W, CONTACTS, passive_torque=["a"] * m)
+    TP = np.zeros((5, m))
+    TP[3, 2] = np.nan
+    out = gt.solve_batch(G, JT, W, CONTACTS, passive_torque=TP)
+    assert set(out.errors) == {3} and "passive_torque[2]" in out.errors[3]
+    assert out.status[3] == gt.INVALID and np.isnan(out.torque[3]).all()
+
+
+def test_a_spring_hands_arrays_solve_as_its_batch():
+    oracle = json.loads((ROOT / "fixtures/mjcf/oracle/menagerie-aero.json").read_text())
+    hand = gt.Hand(ROOT / "fixtures/mjcf/menagerie/aero_right.xml")
+    cases = oracle["cases"]
+    # Case 7 is one of the oracle's grasps the Aero hand holds.
+    d = cases[7]["problem"]
+    pose = np.array(d["object_pose"]["position"] + d["object_pose"]["quaternion"])
+    joints = lambda c: [c["problem"]["hand"]["joint_positions"].get(n, 0.0) for n in hand.joint_names]
+    # The springs at the oracle's configurations, against MuJoCo's qfrc_spring.
+    q = np.array([joints(c) for c in cases])
+    a = hand.arrays(q, d["contacts"], object_pose=pose)
+    assert a.errors == {}
+    for i, c in enumerate(cases):
+        want = np.array([c["passive_torque"][n] for n in a.joint_names])
+        np.testing.assert_allclose(a.passive_torque[i], want, rtol=0, atol=1e-12 * np.abs(want).max())
+    assert np.abs(a.passive_torque).max() > 0.01
+    # Near case 7: the arrays with their springs solve as the hand's batch does.
+    B = 30
+    q = np.array(joints(cases[7])) + np.random.default_rng(5).normal(0, 0.01, (B, len(hand.joint_names)))
+    a = hand.arrays(q, d["contacts"], object_pose=pose)
+    W = np.tile(d["wrench"], (B, 1))
+    models = [{k: c[k] for k in ("model", "mu", "mu_torsion") if k in c} for c in d["contacts"]]
+    direct = hand.solve_batch(q, W, d["contacts"], object_pose=pose)
+    via = gt.solve_batch(
+        a.G, a.JT, W, models, transmission=a.transmission, passive_torque=a.passive_torque
+    )
+    np.testing.assert_array_equal(via.status, direct.status)
+    np.testing.assert_array_equal(via.objective, direct.objective)
+    np.testing.assert_array_equal(via.torque, direct.torque)
+    held = direct.status == 0
+    assert held.sum() >= B // 3
+    # Without the springs the same arrays are another problem.
+    without = gt.solve_batch(a.G, a.JT, W, models, transmission=a.transmission)
+    assert not np.allclose(without.objective[held], direct.objective[held])
