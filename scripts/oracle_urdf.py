@@ -10,6 +10,10 @@ fingertip contacts pushing toward their common centre, and writes, per configura
   Pinocchio's frame Jacobian (LOCAL_WORLD_ALIGNED, at the contact point) and the
   contact frame convention of docs/geometry.md;
 - `grasp_matrix`: the expected G;
+- `gravity`, `gravity_torque`: an acceleration of gravity (9.81 m/s² in a random
+  direction of the root frame) and the links' weight on each independent joint,
+  `−computeGeneralizedGravity` (reduced by the couplings as Jᵀ is; for the hands loaded
+  with mimic, checked against the unreduced model reduced here);
 - `frames` (the first five configurations): every link's frame, from Pinocchio's body
   frames;
 
@@ -105,6 +109,20 @@ def random_quaternion(rng):
     return q / np.linalg.norm(q)  # [w, x, y, z]
 
 
+def full_q(model, q_full):
+    """Pinocchio's configuration of `model` (no mimic joints) from every joint's
+    position by name."""
+    q = pin.neutral(model)
+    for i in range(1, model.njoints):
+        jm = model.joints[i]
+        v = q_full[model.names[i]]
+        if jm.nq == 2:  # continuous: (cos, sin)
+            q[jm.idx_q:jm.idx_q + 2] = [np.cos(v), np.sin(v)]
+        else:
+            q[jm.idx_q] = v
+    return q
+
+
 def main():
     os.makedirs(OUT, exist_ok=True)
     # The random hands of scripts/random_urdf.py, their leaf links as contacts, fewer
@@ -119,8 +137,11 @@ def main():
         hands.append((f[:-5], f"{RANDOM}/{f}", False, leaves, 100 + i, RANDOM_CASES))
     for name, rel, use_mimic, tips, seed, count in hands:
         rng = np.random.default_rng(seed)
+        # Gravity's directions from their own stream: the configurations stay as drawn.
+        grng = np.random.default_rng(seed + 1000)
         path = os.path.join(ROOT, rel)
         model = pin.buildModelFromUrdf(path, mimic=use_mimic)
+        unreduced = pin.buildModelFromUrdf(path)
         coupled = couplings(path)
         kinds = {j.get("name"): j.get("type") for j in ET.parse(path).getroot().iter("joint")}
         limits = {}
@@ -218,6 +239,27 @@ def main():
                 for j, row in jt_full.items():
                     lead, mult, _ = coupled[j]
                     jt[lead] = [a + mult * b for a, b in zip(jt[lead], row)]
+            gravity = grng.normal(size=3)
+            gravity *= 9.81 / np.linalg.norm(gravity)
+            weights = []
+            for gm, mimic in ((model, use_mimic), (unreduced, False)):
+                gm = gm.copy()
+                gm.gravity.linear = gravity
+                gd = gm.createData()
+                qg = q if gm.nq == model.nq else full_q(gm, q_full)
+                tau = -pin.computeGeneralizedGravity(gm, gd, qg)
+                cols = {gm.names[i]: gm.joints[i].idx_v for i in range(1, gm.njoints)
+                        if gm.joints[i].shortname() != "JointModelMimic"}
+                if mimic:
+                    weights.append({j: float(tau[v]) for j, v in cols.items()})
+                else:
+                    red = {j: 0.0 for j in independent}
+                    for j, v in cols.items():
+                        lead, mult, _ = coupled[j]
+                        red[lead] += mult * float(tau[v])
+                    weights.append(red)
+            scale = max(abs(v) for v in weights[1].values())
+            assert all(abs(weights[0][j] - weights[1][j]) <= 1e-12 * scale for j in independent), name
             weight = 0.3 * 9.81
             problem = {
                 "name": f"{name}-{len(cases)}",
@@ -235,6 +277,8 @@ def main():
                 "defaulted_joints": sorted(omitted),
                 "grasp_matrix": np.array(g_cols).T.tolist(),
                 "jacobian_transpose": jt,
+                "gravity": gravity.tolist(),
+                "gravity_torque": weights[0],
             }
             if len(cases) < FRAME_CASES:
                 # Every link's frame in the root link's: position, then the rotation

@@ -163,6 +163,16 @@ def _limits(limits: Any) -> Any:
     return [None if isinstance(v, float) and v == math.inf else v for v in limits]
 
 
+def _gravity(gravity: Any) -> Any:
+    """``gravity`` for the hand form: ``None``, ``"model"`` or three real numbers."""
+    if gravity is None or isinstance(gravity, str):
+        return gravity
+    g = _real("gravity", gravity)
+    if g.shape != (3,):
+        raise ValueError(f"gravity: expected [gx, gy, gz] or \"model\", got shape {g.shape}")
+    return g.tolist()
+
+
 def _contacts(contacts: Any) -> list:
     """The contact list, one dict per contact."""
     if isinstance(contacts, (Mapping, str, bytes)) or not isinstance(contacts, Iterable):
@@ -544,10 +554,11 @@ HandArrays = namedtuple(
 HandArrays.__doc__ = """What ``Hand.arrays`` builds: ``G[B,6,n]`` and ``JT[B,m,n]`` per grasp
 (NaN for a rejected one), the transmission of an MJCF hand with actuators (else None):
 ``T[m,a]``, or ``T[B,m,a]`` per grasp when spatial tendons drive it (their moment arms
-change with the configuration), the names of JT's rows and T's columns, ``errors``: ``{b: message}``, and
-``passive_torque[B,m]``: the springs' torques on JT's rows at each configuration
-(MuJoCo's ``qfrc_spring``; zero for a hand without springs), which ``solve_batch``
-takes as ``passive_torque`` to solve what ``Hand.solve_batch`` solves."""
+change with the configuration), the names of JT's rows and T's columns, ``errors``:
+``{b: message}``, and ``passive_torque[B,m]``: the springs' torques on JT's rows at
+each configuration (MuJoCo's ``qfrc_spring``), plus the links' weight with
+``gravity``; zero for a hand without either. ``solve_batch`` takes it as
+``passive_torque`` to solve what ``Hand.solve_batch`` solves."""
 
 
 class Hand:
@@ -652,14 +663,21 @@ class Hand:
         return (P[0], R[0]) if single else (P, R)
 
     def arrays(
-        self, joint_positions, contacts: Sequence[Mapping], *, positions=None, normals=None, object_pose=None
+        self,
+        joint_positions,
+        contacts: Sequence[Mapping],
+        *,
+        positions=None,
+        normals=None,
+        object_pose=None,
+        gravity=None,
     ) -> HandArrays:
         """Each grasp's G, Jᵀ and spring torques (as ``solve_batch`` poses them, same
         arguments), for ``gt.solve_batch``, another solver or a grasp-quality measure. G's columns are
         the contacts' force components in their frames (``docs/geometry.md``), in the
         object frame about its origin; JT's rows are ``joint_names``."""
         q, P, N, pose = self._poses(joint_positions, positions, normals, object_pose)
-        spec_json = _dumps({"contacts": _contacts(contacts)})
+        spec_json = _dumps({"contacts": _contacts(contacts), "gravity": _gravity(gravity)})
         d = json.loads(self._native.describe(spec_json))
         B, n, m = q.shape[0], d["force_dim"], len(d["joint_names"])
         G = np.empty((B, 6, n))
@@ -680,6 +698,7 @@ class Hand:
         positions=None,
         normals=None,
         object_pose=None,
+        gravity=None,
         backend: Optional[str] = None,
         cones: str = "linear",
         sides: Optional[int] = None,
@@ -710,7 +729,9 @@ class Hand:
         Every grasp has the same joints: the independent joints that move a contact's
         link (and those an actuator on them drives). ``names`` lists them, the last axis
         of ``torque``; an MJCF hand with actuators gives actuator forces.
-        ``torque_limits="model"`` takes the file's limits. The solver keywords,
+        ``torque_limits="model"`` takes the file's limits. ``gravity`` (``[gx, gy,
+        gz]`` in the root frame, or ``"model"``: an MJCF file's ``<option gravity>``)
+        adds the links' weight to the springs' torques (default: weightless fingers). The solver keywords,
         ``threads``, ``warm_start`` and the preallocated outputs are ``solve_batch``'s.
         A grasp whose input is rejected (a NaN joint position, a normal that is not
         unit) is an ``invalid`` item with its message in ``errors``; only arguments that
@@ -722,6 +743,7 @@ class Hand:
         B, K = q.shape[0], W3.shape[1]
         spec = {
             "contacts": _contacts(contacts),
+            "gravity": _gravity(gravity),
             "torque_weights": torque_weights,
             "torque_limits": _limits(torque_limits),
             "min_normal_force": min_normal_force,

@@ -858,6 +858,8 @@ fn run_batch<S: BatchSource>(
 #[serde(deny_unknown_fields)]
 struct HandSpec {
     contacts: Vec<HandContact>,
+    /// The hand form's `hand.gravity`: `[gx, gy, gz]` or `"model"`.
+    gravity: Option<serde_json::Value>,
     torque_weights: Option<Vec<f64>>,
     torque_limits: Option<serde_json::Value>,
     min_normal_force: Option<serde_json::Value>,
@@ -883,6 +885,7 @@ impl Hand {
             hand: grasp_torque::hand::HandSpec {
                 model: self.path.clone(),
                 joint_positions: Default::default(),
+                gravity: spec.gravity,
             },
             object_pose: None,
             contacts: spec.contacts,

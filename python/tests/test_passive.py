@@ -103,3 +103,37 @@ def test_a_spring_hands_arrays_solve_as_its_batch():
     # Without the springs the same arrays are another problem.
     without = gt.solve_batch(a.G, a.JT, W, models, transmission=a.transmission)
     assert not np.allclose(without.objective[held], direct.objective[held])
+
+
+def test_a_hands_weight_is_pinocchios_and_solves_as_passive_torques():
+    oracle = json.loads((ROOT / "fixtures/urdf/oracle/allegro.json").read_text())
+    hand = gt.Hand(ROOT / "fixtures/urdf/allegro/allegro_hand_right.urdf")
+    pinch = json.loads((ROOT / "fixtures/hands/allegro-pinch.json").read_text())
+    contacts = pinch["contacts"]
+    for case in oracle["cases"][:10]:
+        q = np.array([case["problem"]["hand"]["joint_positions"].get(n, 0.0) for n in hand.joint_names])
+        a = hand.arrays(q[None], contacts, gravity=case["gravity"])
+        want = np.array([case["gravity_torque"][n] for n in a.joint_names])
+        scale = max(abs(v) for v in case["gravity_torque"].values())
+        np.testing.assert_allclose(a.passive_torque[0], want, rtol=0, atol=1e-12 * scale)
+    # The pinch with the fingers' weight (gravity is +x in its root frame), against the
+    # arrays solved with it, and against weightless fingers.
+    q = np.array([pinch["hand"]["joint_positions"].get(n, 0.0) for n in hand.joint_names])
+    Q = q + np.random.default_rng(2).normal(0, 0.02, (40, q.size))
+    pose = pinch["object_pose"]["position"] + pinch["object_pose"]["quaternion"]
+    W = np.tile(pinch["wrench"], (len(Q), 1))
+    g = [9.81, 0.0, 0.0]
+    heavy = hand.solve_batch(Q, W, contacts, object_pose=pose, gravity=g, torque_limits="model")
+    light = hand.solve_batch(Q, W, contacts, object_pose=pose, torque_limits="model")
+    a = hand.arrays(Q, contacts, object_pose=pose, gravity=g)
+    models = [{"model": c["model"], "mu": c["mu"]} for c in contacts]
+    limits = gt.Problem.load(ROOT / "fixtures/hands/allegro-pinch.json").to_dict()["torque_limits"]
+    via = gt.solve_batch(a.G, a.JT, W, models, passive_torque=a.passive_torque, torque_limits=limits)
+    np.testing.assert_array_equal(via.torque, heavy.torque)
+    held = (heavy.status == 0) & (light.status == 0)
+    assert held.sum() >= 30
+    assert np.abs(heavy.torque[held] - light.torque[held]).max() > 1e-3 * np.abs(light.torque).max()
+    with pytest.raises(ValueError, match="hand.gravity.*a URDF has none"):
+        hand.arrays(Q, contacts, gravity="model")
+    with pytest.raises(ValueError, match="gravity: expected"):
+        hand.arrays(Q, contacts, gravity=[0, 0])

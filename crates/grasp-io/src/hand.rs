@@ -32,6 +32,13 @@ pub struct HandSpec {
     /// metres (prismatic). A joint not listed sits at 0.
     #[serde(default)]
     pub joint_positions: BTreeMap<String, f64>,
+    /// The acceleration of gravity on the fingers, `[gx, gy, gz]` in the root frame
+    /// (m/s² in SI; a URDF's root link, an MJCF's world), or `"model"` for an MJCF
+    /// file's `<option gravity>`: the links' weight then enters as passive joint
+    /// torques. Absent: the fingers are weightless (the object's weight is in the
+    /// wrench either way).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gravity: Option<serde_json::Value>,
 }
 
 /// The object frame in the robot's root-link frame.
@@ -617,7 +624,13 @@ impl HandFile {
                 }
             }
         }
+        let gravity = self.hand.gravity(robot)?;
+        if gravity.is_some() {
+            // Every link's weight loads some joint: all are posed.
+            needed.fill(true);
+        }
         let mut grasps = HandGrasps {
+            gravity,
             robot,
             contacts,
             needed,
@@ -651,6 +664,45 @@ impl HandFile {
             grasps.template = template;
         }
         Ok(grasps)
+    }
+}
+
+/// A link whose weight gravity needs but the file does not give.
+fn unknown_mass(why: &str) -> ProblemError {
+    ProblemError::invalid(
+        "hand.gravity",
+        "a hand whose moving links' masses are known (or no gravity)",
+        why,
+    )
+}
+
+impl HandSpec {
+    /// `gravity` as a vector in the root frame, checked.
+    fn gravity(&self, robot: &Robot) -> Result<Option<Vector3<f64>>, ProblemError> {
+        let expected = "\"model\" (the MJCF file's <option gravity>) or [gx, gy, gz] in the root frame, finite, of magnitude at most 1e12";
+        let g = match &self.gravity {
+            None | Some(serde_json::Value::Null) => return Ok(None),
+            Some(serde_json::Value::String(s)) if s == "model" => robot.gravity.ok_or_else(|| {
+                ProblemError::invalid(
+                    "hand.gravity",
+                    "[gx, gy, gz] in the root frame: this file fixes no gravity on the hand (a URDF has none, and a floating MJCF hand's orientation in the world is not fixed)",
+                    "\"model\"",
+                )
+            })?,
+            Some(v) => {
+                let g: [f64; 3] = serde_json::from_value(v.clone())
+                    .map_err(|_| ProblemError::invalid("hand.gravity", expected, v))?;
+                if let Some(x) = g.iter().find(|x| !x.is_finite() || x.abs() > MAX_MAGNITUDE) {
+                    return Err(ProblemError::invalid("hand.gravity", expected, x));
+                }
+                Vector3::from(g)
+            }
+        };
+        // Every moving link's mass must be known: checked once, not per pose.
+        robot
+            .gravity_torques(&robot.pose(&vec![0.0; robot.independent.len()]), &g)
+            .map_err(|why| unknown_mass(&why))?;
+        Ok(Some(g))
     }
 }
 
@@ -756,6 +808,8 @@ pub struct HandGrasps<'r> {
     warnings: Vec<String>,
     /// The columns of T that spatial tendons give: (column, tendon, gear).
     tendon_columns: Vec<(usize, usize, f64)>,
+    /// Gravity on the fingers, in the root frame.
+    gravity: Option<Vector3<f64>>,
 }
 
 impl HandGrasps<'_> {
@@ -781,21 +835,28 @@ impl HandGrasps<'_> {
         Ok(())
     }
 
-    /// The springs' torques on the problem's joints at `q_ind` (`None` without
-    /// springs), reduced to the independent joints (`Pᵀ`) as Jᵀ is.
+    /// The springs' and gravity's torques on the problem's joints at `q_ind` (`None`
+    /// without either), reduced to the independent joints (`Pᵀ`) as Jᵀ is.
     fn passive_torque(
         &self,
         q_ind: &[f64],
         frames: &Pose,
     ) -> Result<Option<Vec<f64>>, ProblemError> {
-        if self.robot.springs.is_empty() {
+        if self.robot.springs.is_empty() && self.gravity.is_none() {
             return Ok(None);
         }
         let full = self.robot.full_positions(q_ind);
-        let torques = self
+        let mut torques = self
             .robot
             .passive_torques(&full, frames)
             .map_err(|w| inside_wrap(&w))?;
+        if let Some(g) = &self.gravity {
+            let weight = self
+                .robot
+                .gravity_torques(frames, g)
+                .map_err(|why| unknown_mass(&why))?;
+            torques.iter_mut().zip(weight).for_each(|(t, w)| *t += w);
+        }
         let mut out = vec![0.0; self.rows.len()];
         for (j, tj) in torques.into_iter().enumerate() {
             if let Some(cp) = self.robot.coupling[j] {

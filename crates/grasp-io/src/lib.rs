@@ -8,6 +8,7 @@
 pub mod file;
 pub mod geometry;
 pub mod hand;
+pub mod mass;
 pub mod mjcf;
 pub mod tendon;
 pub mod urdf;

@@ -28,6 +28,7 @@
 //! is read only when a spatial tendon an actuator pulls on wraps it; other elements are ignored, with one
 //! warning per element name.
 
+use crate::mass::LinkMass;
 use crate::tendon::{PathPoint, SpatialTendon, Spring, SpringOn, WrapGeom, WrapShape};
 use crate::urdf::{
     line_at, nearest, newline_offsets, Actuator, Drive, Joint, JointKind, LimitSource, Robot, Site,
@@ -244,6 +245,15 @@ struct Compiler {
     /// `autolimits` (MuJoCo's default, true): a range alone makes its element limited.
     /// When false, MuJoCo refuses a range whose `limited` is left unspecified.
     autolimits: bool,
+    /// `inertiafromgeom`: `Some(true)` always from geoms, `Some(false)` never, `None`
+    /// (`auto`, the default) for bodies without an `<inertial>`.
+    inertia_from_geom: Option<bool>,
+    /// `inertiagrouprange` (default 0 5): the geom groups that give a body mass.
+    group_range: (f64, f64),
+    /// `boundmass` (default 0): the least mass of a body.
+    boundmass: f64,
+    /// `settotalmass` (default −1, off): the bodies' masses are scaled to this total.
+    settotalmass: f64,
 }
 
 /// A range `(lower, upper)` that limits, or None.
@@ -586,6 +596,24 @@ struct Tree {
     springref: HashMap<usize, f64>,
     /// Joints with a spring: (joint, stiffness).
     joint_springs: Vec<(usize, f64)>,
+    /// The bodies, for their masses.
+    bodies: Vec<Body>,
+    /// Each geom on a body: its link and what it weighs (`None`: outside the
+    /// compiler's `inertiagrouprange`).
+    geom_masses: Vec<(usize, Option<PointMass>)>,
+}
+
+/// A mass (kg) at a point of its link's frame, or why it is not known.
+type PointMass = Result<(f64, Vector3<f64>), String>;
+
+/// What a body's mass is computed from.
+struct Body {
+    link: usize,
+    /// Its `<inertial>`'s mass and centre, if it has one.
+    inertial: Option<PointMass>,
+    gravcomp: f64,
+    /// Its `pos` attribute.
+    pos: Vector3<f64>,
 }
 
 impl Tree {
@@ -799,6 +827,24 @@ impl Ctx<'_> {
             0.0,
             e.line,
         );
+        let inertial = e.children.iter().find(|c| c.name == "inertial").map(|i| {
+            let iv = self.view(i, "inertial", &inner);
+            let at = |m: ProblemError| m.to_string();
+            match (iv.leading("mass", 1).map_err(at)?, iv.fixed::<3>("pos").map_err(at)?) {
+                (Some(m), Some(p)) if m >= 0.0 => Ok((m, Vector3::from(p))),
+                (m, p) => Err(format!(
+                    "<inertial> (line {}): expected a mass ≥ 0 and a pos, got mass {m:?} and pos {p:?}",
+                    i.line
+                )),
+            }
+        });
+        let gravcomp = v.leading("gravcomp", 1)?.unwrap_or(0.0);
+        t.bodies.push(Body {
+            link,
+            inertial,
+            gravcomp,
+            pos: Vector3::from(v.fixed::<3>("pos")?.unwrap_or([0.0; 3])),
+        });
         self.children(t, e, link, &inner, Isometry3::identity(), false)
     }
 
@@ -841,6 +887,69 @@ impl Ctx<'_> {
         })
     }
 
+    /// What a geom weighs and where, in its body's frame, as MuJoCo's compiler
+    /// computes it for a body's inertia: its `mass`, else `density` (default 1000)
+    /// times its volume, at its centre; `Ok(None)` outside `inertiagrouprange`. A mesh
+    /// (whose volume and centre come from the mesh file, never read) and a shell
+    /// inertia are `Err`, which matters only when gravity is asked for.
+    fn geom_mass(
+        &self,
+        e: &El,
+        childclass: &str,
+        offset: Isometry3<f64>,
+    ) -> Result<Option<PointMass>, String> {
+        let v = self.view(e, "geom", childclass);
+        let at = |m: ProblemError| m.to_string();
+        let group = v.leading("group", 1).map_err(at)?.unwrap_or(0.0);
+        if group < self.c.group_range.0 || group > self.c.group_range.1 {
+            return Ok(None);
+        }
+        let kind = v.get("type").unwrap_or("sphere");
+        let here = format!("geom of type {kind} (line {})", e.line);
+        if v.get("shellinertia") == Some("true") {
+            return Err(format!(
+                "{here}: a shell inertia is not computed; give the body an <inertial>"
+            ));
+        }
+        let size = v.numbers("size").map_err(at)?.unwrap_or_default();
+        let s = |i: usize| size.get(i).copied().unwrap_or(0.0);
+        let fromto = v.fixed::<6>("fromto").map_err(at)?;
+        // With fromto, the half-length along the segment replaces a size.
+        let half = |given: f64| {
+            fromto.map_or(given, |f| {
+                (Vector3::new(f[0], f[1], f[2]) - Vector3::new(f[3], f[4], f[5])).norm() / 2.0
+            })
+        };
+        use std::f64::consts::PI;
+        let volume = match kind {
+            "sphere" if fromto.is_none() => 4.0 / 3.0 * PI * s(0).powi(3),
+            "capsule" => PI * s(0).powi(2) * 2.0 * half(s(1)) + 4.0 / 3.0 * PI * s(0).powi(3),
+            "cylinder" => PI * s(0).powi(2) * 2.0 * half(s(1)),
+            // With fromto, MuJoCo takes both cross-section half-sizes from size[0].
+            "ellipsoid" | "box" => {
+                let s1 = if fromto.is_some() { s(0) } else { s(1) };
+                let v = s(0) * s1 * half(s(2));
+                if kind == "box" {
+                    8.0 * v
+                } else {
+                    4.0 / 3.0 * PI * v
+                }
+            }
+            "mesh" | "sdf" => {
+                return Err(format!("{here}: its mass and centre come from the mesh, which is not read; give the body an <inertial>"))
+            }
+            other => return Err(format!("{here}: no volume for a {other} geom here; give the body an <inertial>")),
+        };
+        let mass = match v.leading("mass", 1).map_err(at)? {
+            Some(m) => m,
+            None => v.leading("density", 1).map_err(at)?.unwrap_or(1000.0) * volume,
+        };
+        let centre = (offset * v.placement(self.c).map_err(at)?)
+            .translation
+            .vector;
+        Ok(Some(Ok((mass, centre))))
+    }
+
     /// The bodies, sites and frames in `e` (a body, `<worldbody>` or `<frame>`), on
     /// `link`, moved by `offset`.
     fn children(
@@ -859,6 +968,11 @@ impl Ctx<'_> {
                     if let Some(name) = c.attr("name") {
                         let geom = self.wrap_geom(c, name, link, childclass, offset);
                         t.geoms.insert(name.to_string(), geom);
+                    }
+                    if !top {
+                        let m = self.geom_mass(c, childclass, offset);
+                        t.geom_masses
+                            .push((link, m.unwrap_or_else(|e| Some(Err(e)))));
                     }
                 }
                 "joint" | "freejoint" | "inertial" | "camera" | "light" => {}
@@ -892,6 +1006,81 @@ impl Ctx<'_> {
         }
         Ok(())
     }
+}
+
+/// Each link's mass as MuJoCo's compiler gives it: a body's `<inertial>`, or its
+/// geoms' (`inertiafromgeom`), at least `boundmass`, all scaled to `settotalmass`, and
+/// then times `1 − gravcomp` (the part gravity loads).
+fn body_masses(
+    bodies: &[Body],
+    geoms: &[(usize, Option<PointMass>)],
+    c: Compiler,
+    links: usize,
+) -> Vec<LinkMass> {
+    let mut out = vec![LinkMass::None; links];
+    let mut known = Vec::with_capacity(bodies.len());
+    for b in bodies {
+        // Nothing gives the body mass: MuJoCo puts its inertial frame (where
+        // `boundmass` sits) at the body's `pos` attribute, read in the body's own
+        // frame (MuJoCo 3.3's compiled `body_ipos`).
+        let nothing = Ok((0.0, b.pos));
+        let from_geoms = || -> PointMass {
+            let (mut m, mut first, mut any) = (0.0, Vector3::zeros(), false);
+            for (_, g) in geoms.iter().filter(|(l, _)| *l == b.link) {
+                if let Some(g) = g {
+                    let (gm, at) = g.clone()?;
+                    m += gm;
+                    first += gm * at;
+                    any = true;
+                }
+            }
+            if any {
+                Ok((m, if m > 0.0 { first / m } else { Vector3::zeros() }))
+            } else {
+                nothing.clone()
+            }
+        };
+        // `true` prefers the geoms over an <inertial>, which still serves a body
+        // without geoms in the groups.
+        let has_geoms = geoms.iter().any(|(l, g)| *l == b.link && g.is_some());
+        let mass = match (c.inertia_from_geom, &b.inertial) {
+            (Some(true), Some(i)) if !has_geoms => i.clone(),
+            (Some(true), _) | (None, None) => from_geoms(),
+            (_, Some(i)) => i.clone(),
+            (Some(false), None) => nothing.clone(),
+        };
+        known.push(mass.map(|(m, at)| (m.max(c.boundmass), at)));
+    }
+    let mut scale = 1.0;
+    if c.settotalmass > 0.0 {
+        match known
+            .iter()
+            .map(|m| m.as_ref().map(|m| m.0))
+            .sum::<Result<f64, _>>()
+        {
+            Ok(total) if total > 0.0 => scale = c.settotalmass / total,
+            Ok(_) => {}
+            Err(why) => {
+                let why =
+                    format!("settotalmass scales every body's mass, and one is not known: {why}");
+                for b in bodies {
+                    out[b.link] = LinkMass::Unknown(why.clone());
+                }
+                return out;
+            }
+        }
+    }
+    for (b, mass) in bodies.iter().zip(known) {
+        out[b.link] = match mass {
+            Ok((0.0, _)) => LinkMass::None,
+            Ok((m, com)) => LinkMass::Known {
+                mass: m * scale * (1.0 - b.gravcomp),
+                com,
+            },
+            Err(why) => LinkMass::Unknown(why),
+        };
+    }
+    out
 }
 
 /// A spatial tendon's path: its sites, the named sphere and cylinder geoms it wraps
@@ -1009,7 +1198,12 @@ impl Robot {
             degrees: true,
             eulerseq: *b"xyz",
             autolimits: true,
+            inertia_from_geom: None,
+            group_range: (0.0, 5.0),
+            boundmass: 0.0,
+            settotalmass: -1.0,
         };
+        let mut gravity = Vector3::new(0.0, 0.0, -9.81);
         let mut d = Defaults::default();
         d.parent.insert("main".into(), None);
         let mut ignored = BTreeSet::new();
@@ -1045,6 +1239,19 @@ impl Robot {
                             )
                         }
                     }
+                    let v = View {
+                        r: &r,
+                        d: &d,
+                        e,
+                        kind: "compiler",
+                        class: String::new(),
+                    };
+                    c.inertia_from_geom = v.flag("inertiafromgeom")?;
+                    if let Some([lo, hi]) = v.fixed::<2>("inertiagrouprange")? {
+                        c.group_range = (lo, hi);
+                    }
+                    c.boundmass = v.leading("boundmass", 1)?.unwrap_or(c.boundmass);
+                    c.settotalmass = v.leading("settotalmass", 1)?.unwrap_or(c.settotalmass);
                     if e.attr("coordinate").is_some_and(|v| v != "local") {
                         return Err(r.err(
                             e,
@@ -1054,8 +1261,20 @@ impl Robot {
                 }
                 "default" => d.read(&r, e, None)?,
                 "worldbody" | "tendon" | "actuator" | "equality" => {}
+                "option" => {
+                    let v = View {
+                        r: &r,
+                        d: &d,
+                        e,
+                        kind: "option",
+                        class: String::new(),
+                    };
+                    if let Some(g) = v.fixed::<3>("gravity")? {
+                        gravity = Vector3::from(g);
+                    }
+                }
                 "asset" | "visual" | "sensor" | "contact" | "keyframe" | "custom" | "extension"
-                | "statistic" | "option" | "size" => {}
+                | "statistic" | "size" => {}
                 other => {
                     ignored.insert(other.to_string());
                 }
@@ -1075,6 +1294,8 @@ impl Robot {
             mount: None,
             springref: HashMap::new(),
             joint_springs: Vec::new(),
+            bodies: Vec::new(),
+            geom_masses: Vec::new(),
         };
         let world = t.add_link("world".into(), 0);
         t.body_link.insert("world".into(), world);
@@ -1389,6 +1610,8 @@ impl Robot {
             &t.reference,
             t.warnings,
         )?;
+        robot.masses = body_masses(&t.bodies, &t.geom_masses, c, robot.links.len());
+        robot.gravity = t.mount.is_none().then_some(gravity);
         robot.sites = t.sites;
         robot.actuators = actuators;
         robot.tendons = spatial_tendons;

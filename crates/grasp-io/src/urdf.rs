@@ -3,12 +3,13 @@
 //!
 //! Parsing is [`urdf_rs`]'s, after a pass with `roxmltree` that records where each
 //! element is (for messages), checks every number of `<origin>`, `<axis>`, `<limit>`
-//! and `<mimic>`, reads `<limit>` itself (urdf-rs requires `effort` and `velocity`,
-//! statics neither), and drops what statics never reads: `<inertial>`, `<visual>`,
+//! and `<mimic>`, reads `<limit>` and each `<inertial>`'s mass and centre of mass
+//! itself (urdf-rs requires `effort` and `velocity`, statics neither, and the weight
+//! only when gravity is asked for), and drops what statics never reads: `<visual>`,
 //! `<collision>`, `<calibration>`, `<dynamics>`, `<safety_controller>` and every
 //! top-level element other than `<link>` and `<joint>`.
-//! Malformed or duplicated inertial data therefore loads, with a warning, and meshes are
-//! never opened. Everything the kinematics uses is checked: every error names the file,
+//! Malformed or duplicated inertial data therefore loads, with a warning (the link's
+//! weight is then unknown), and meshes are never opened. Everything the kinematics uses is checked: every error names the file,
 //! the element and the problem.
 //!
 //! Frames follow the URDF specification: a joint's frame is its parent link's frame
@@ -18,6 +19,7 @@
 //! joint follows `q = multiplier · q_leader + offset`; chains of mimics are resolved to
 //! the independent joint at their end.
 
+use crate::mass::LinkMass;
 use crate::tendon::SpatialTendon;
 use grasp_core::error::ProblemError;
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
@@ -143,10 +145,18 @@ pub struct Robot {
     /// Springs on joints and tendons (MJCF `stiffness`; none in a URDF): the passive
     /// torques of [`Robot::passive_torques`].
     pub springs: Vec<crate::tendon::Spring>,
+    /// Per link: its mass and centre of mass (URDF `<inertial>`; MJCF `<inertial>` or
+    /// its geoms, as MuJoCo's compiler computes them), for
+    /// [`Robot::gravity_torques`].
+    pub masses: Vec<crate::mass::LinkMass>,
+    /// The acceleration of gravity in the root frame the file gives (MJCF `<option
+    /// gravity>`, default `0 0 −9.81`): `None` for a URDF, which has none, and for a
+    /// floating MJCF hand, whose orientation in the world the file does not fix.
+    pub gravity: Option<Vector3<f64>>,
     /// Per link: the joint whose child it is (`None` for the root).
-    parent_joint: Vec<Option<usize>>,
+    pub(crate) parent_joint: Vec<Option<usize>>,
     /// Links from the root outwards: every parent comes before its children.
-    order: Vec<usize>,
+    pub(crate) order: Vec<usize>,
     link_lines: Vec<u32>,
 }
 
@@ -291,6 +301,8 @@ struct Scan {
     joint_lines: HashMap<String, u32>,
     limits: HashMap<String, Limit>,
     warnings: Vec<String>,
+    /// Per link with an `<inertial>`: its mass.
+    masses: HashMap<String, LinkMass>,
 }
 
 /// Numbers of an attribute, each finite, or an error naming the element.
@@ -355,6 +367,7 @@ fn scan(text: &str, file: &str) -> Result<Scan, ProblemError> {
     let mut joint_lines = HashMap::new();
     let mut limits = HashMap::new();
     let mut warnings = Vec::new();
+    let mut masses = HashMap::new();
     let mut links = 0usize;
     for e in robot.children().filter(|n| n.is_element()) {
         let tag = e.tag_name().name();
@@ -404,18 +417,35 @@ fn scan(text: &str, file: &str) -> Result<Scan, ProblemError> {
             }
             if ctag == "inertial" {
                 inertials += 1;
-                if let Some(bad) = malformed_inertial(c) {
+                let mass = inertial_mass(c)
+                    .map_err(|bad| format!("<inertial> on line {} is malformed ({bad})", line(c)));
+                if let Err(why) = &mass {
                     warnings.push(format!(
-                        "{file}: {at}: <inertial> on line {} is malformed ({bad}); ignored, since inertia does not enter statics",
+                        "{file}: {at}: {why}: the link's weight is unknown (an error only if gravity is asked for)"
+                    ));
+                } else if let Some(bad) = malformed_tensor(c) {
+                    warnings.push(format!(
+                        "{file}: {at}: <inertial> on line {} has a malformed {bad}; ignored, since rotational inertia does not enter statics",
                         line(c)
                     ));
                 }
+                masses.insert(
+                    name.to_string(),
+                    mass.map_or_else(LinkMass::Unknown, |(mass, com)| LinkMass::Known {
+                        mass,
+                        com,
+                    }),
+                );
             }
         }
         if inertials > 1 {
             warnings.push(format!(
-                "{file}: {at}: {inertials} <inertial> elements; ignored, since inertia does not enter statics"
+                "{file}: {at}: {inertials} <inertial> elements: the link's weight is unknown (an error only if gravity is asked for)"
             ));
+            masses.insert(
+                name.to_string(),
+                LinkMass::Unknown(format!("{inertials} <inertial> elements")),
+            );
         }
         if tag == "joint" {
             for c in e.children().filter(|n| n.is_element()) {
@@ -497,27 +527,58 @@ fn scan(text: &str, file: &str) -> Result<Scan, ProblemError> {
         joint_lines,
         limits,
         warnings,
+        masses,
     })
 }
 
-/// Why an `<inertial>` element would not parse, if it would not.
-fn malformed_inertial(e: roxmltree::Node) -> Option<String> {
-    let number = |tag: &str, attr: &str| -> Option<String> {
-        let v = e
-            .children()
-            .find(|c| c.has_tag_name(tag))
-            .and_then(|c| c.attribute(attr));
-        match v.map(|s| s.trim().parse::<f64>()) {
-            Some(Ok(x)) if x.is_finite() => None,
-            Some(_) => Some(format!("<{tag} {attr}=\"{}\">", v.unwrap_or(""))),
-            None => Some(format!("no <{tag} {attr}>")),
+/// Why `<tag attr>` of an `<inertial>` is not one finite number, if it is not.
+fn inertial_number(e: roxmltree::Node, tag: &str, attr: &str) -> Result<f64, String> {
+    let v = e
+        .children()
+        .find(|c| c.has_tag_name(tag))
+        .and_then(|c| c.attribute(attr));
+    match v.map(|s| s.trim().parse::<f64>()) {
+        Some(Ok(x)) if x.is_finite() => Ok(x),
+        Some(_) => Err(format!("<{tag} {attr}=\"{}\">", v.unwrap_or(""))),
+        None => Err(format!("no <{tag} {attr}>")),
+    }
+}
+
+/// An `<inertial>`'s mass (finite, ≥ 0) and centre of mass (`<origin xyz>`, default
+/// 0; `rpy` turns only the inertia tensor), or what is malformed.
+fn inertial_mass(e: roxmltree::Node) -> Result<(f64, Vector3<f64>), String> {
+    let mass = inertial_number(e, "mass", "value")?;
+    if !(0.0..=grasp_core::problem::MAX_MAGNITUDE).contains(&mass) {
+        return Err(format!("<mass value=\"{mass}\">: expected 0 to 1e12"));
+    }
+    let com = match e
+        .children()
+        .find(|c| c.has_tag_name("origin"))
+        .and_then(|c| c.attribute("xyz"))
+    {
+        None => Vector3::zeros(),
+        Some(text) => {
+            let v: Vec<f64> = text
+                .split_whitespace()
+                .filter_map(|v| v.parse::<f64>().ok())
+                .filter(|x| x.is_finite() && x.abs() <= grasp_core::problem::MAX_MAGNITUDE)
+                .collect();
+            if v.len() != 3 || text.split_whitespace().count() != 3 {
+                return Err(format!(
+                    "<origin xyz=\"{text}\">: expected 3 finite numbers"
+                ));
+            }
+            Vector3::new(v[0], v[1], v[2])
         }
     };
-    number("mass", "value").or_else(|| {
-        ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"]
-            .iter()
-            .find_map(|a| number("inertia", a))
-    })
+    Ok((mass, com))
+}
+
+/// The first malformed entry of an `<inertial>`'s `<inertia>`, if any.
+fn malformed_tensor(e: roxmltree::Node) -> Option<String> {
+    ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"]
+        .iter()
+        .find_map(|a| inertial_number(e, "inertia", a).err())
 }
 
 impl Robot {
@@ -775,6 +836,10 @@ impl Robot {
         let (independent, coupling) =
             resolve_couplings(&joints, file, &mut warnings, |n| joint_at(n))?;
         let link_lines = links.iter().map(|n| link_line(n)).collect();
+        let masses = links
+            .iter()
+            .map(|n| scan.masses.get(n).cloned().unwrap_or(LinkMass::None))
+            .collect();
         Ok(Self {
             name: parsed.name,
             source: file.to_string(),
@@ -791,6 +856,8 @@ impl Robot {
             actuators: Vec::new(),
             tendons: Vec::new(),
             springs: Vec::new(),
+            masses,
+            gravity: None,
         })
     }
 
@@ -845,6 +912,8 @@ impl Robot {
             actuators: Vec::new(),
             tendons: Vec::new(),
             springs: Vec::new(),
+            masses: Vec::new(),
+            gravity: None,
         })
     }
 

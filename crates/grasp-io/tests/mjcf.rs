@@ -1,8 +1,11 @@
 //! MJCF hands against MuJoCo (fixtures/mjcf/oracle, written by scripts/oracle_mjcf.py):
-//! Jᵀ, T and G per configuration, and malformed files as named errors.
+//! Jᵀ, T and G per configuration; the bodies' masses and gravity's joint torques
+//! (fixtures/mjcf/gravity, written by scripts/mass_mjcf.py); and malformed files as
+//! named errors.
 
 use grasp_core::error::ProblemError;
 use grasp_io::hand::HandFile;
+use grasp_io::mass::LinkMass;
 use grasp_io::urdf::Robot;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -164,6 +167,121 @@ fn jacobians_and_transmissions_match_mujoco() {
             cases.len()
         );
     }
+}
+
+#[test]
+fn masses_and_gravity_torques_match_mujoco() {
+    let dir = repo("fixtures/mjcf/gravity");
+    let oracle: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("oracle.json")).unwrap()).unwrap();
+    let hands = oracle["hands"].as_array().unwrap();
+    assert!(hands.len() >= 16, "{} hands", hands.len());
+    let (mut worst_m, mut worst_g, mut worst_p, mut loaded) = (0.0f64, 0.0f64, 0.0f64, 0);
+    for hand in hands {
+        let file = hand["model"].as_str().unwrap();
+        let robot = Robot::load(&dir.join(file)).unwrap();
+        let gravity: [f64; 3] = serde_json::from_value(hand["gravity"].clone()).unwrap();
+        let g = robot.gravity.expect("a fixed hand's file fixes gravity");
+        assert_eq!(g.as_slice(), &gravity, "{file}: <option gravity>");
+        // Each body's mass (the part gravity loads) and centre, as MuJoCo compiles them.
+        let bodies = hand["bodies"].as_object().unwrap();
+        let heaviest = bodies
+            .values()
+            .fold(0.0f64, |a, b| a.max(b["mass"].as_f64().unwrap()));
+        for (name, b) in bodies {
+            let link = robot
+                .link(name)
+                .unwrap_or_else(|| panic!("{file}: body {name}"));
+            let loads = b["mass"].as_f64().unwrap() * (1.0 - b["gravcomp"].as_f64().unwrap());
+            let com: [f64; 3] = serde_json::from_value(b["com"].clone()).unwrap();
+            let (mass, at) = match &robot.masses[link] {
+                LinkMass::None => (0.0, nalgebra::Vector3::zeros()),
+                LinkMass::Known { mass, com } => (*mass, *com),
+                LinkMass::Unknown(why) => panic!("{file}: {name}: {why}"),
+            };
+            let err = (mass - loads).abs() / heaviest;
+            worst_m = worst_m.max(err);
+            assert!(err <= 1e-12, "{file}: {name} weighs {mass}, MuJoCo {loads}");
+            if loads > 0.0 {
+                let off = (at - nalgebra::Vector3::from(com)).norm();
+                worst_m = worst_m.max(off / 0.1);
+                assert!(
+                    off <= 1e-12,
+                    "{file}: {name}'s centre {at:?}, MuJoCo {com:?}"
+                );
+            }
+        }
+        // Gravity's torques per configuration, reduced by the couplings; and the hand
+        // form's passive torques (springs and weight) on its joints.
+        let sites: Vec<serde_json::Value> = robot
+            .sites
+            .iter()
+            .filter(|s| {
+                robot
+                    .chain(s.link)
+                    .iter()
+                    .any(|&j| robot.joints[j].kind != grasp_io::urdf::JointKind::Fixed)
+            })
+            .take(3)
+            .map(|s| serde_json::json!({"site": s.name, "model": "fpc"}))
+            .collect();
+        for case in hand["cases"].as_array().unwrap() {
+            let q: BTreeMap<String, f64> =
+                serde_json::from_value(case["joint_positions"].clone()).unwrap();
+            let want: BTreeMap<String, f64> =
+                serde_json::from_value(case["gravity_torque"].clone()).unwrap();
+            let springs: BTreeMap<String, f64> =
+                serde_json::from_value(case["spring_torque"].clone()).unwrap();
+            let q_ind: Vec<f64> = robot
+                .independent
+                .iter()
+                .map(|&j| q[&robot.joints[j].name])
+                .collect();
+            let full = robot.gravity_torques(&robot.pose(&q_ind), &g).unwrap();
+            let mut got = vec![0.0; q_ind.len()];
+            for (j, c) in robot.coupling.iter().enumerate() {
+                if let Some(c) = c {
+                    got[c.independent] += c.multiplier * full[j];
+                }
+            }
+            let scale = want.values().fold(0.0f64, |a, v| a.max(v.abs()));
+            for (k, &j) in robot.independent.iter().enumerate() {
+                let name = &robot.joints[j].name;
+                let err = (got[k] - want[name]).abs() / scale;
+                worst_g = worst_g.max(err);
+                assert!(
+                    err <= 1e-10,
+                    "{file}: weight on {name} {} vs MuJoCo {}",
+                    got[k],
+                    want[name]
+                );
+            }
+            let problem: HandFile = serde_json::from_value(serde_json::json!({
+                "hand": {"model": file, "joint_positions": q, "gravity": "model"},
+                "contacts": sites,
+                "wrench": [0, 0, 0, 0, 0, 0]
+            }))
+            .unwrap();
+            let p = match problem.into_problem(&dir) {
+                Ok(p) => p.problem,
+                // A configuration that puts a side site inside its geom.
+                Err(e) if e.to_string().contains("side site") => continue,
+                Err(e) => panic!("{file}: {e}"),
+            };
+            let passive = p.passive_torque.expect("gravity was asked for");
+            let pscale = scale.max(springs.values().fold(0.0f64, |a, v| a.max(v.abs())));
+            for (r, name) in p.joint_names.iter().enumerate() {
+                let err = (passive[r] - want[name] - springs[name]).abs() / pscale;
+                worst_p = worst_p.max(err);
+                assert!(err <= 1e-10, "{file}: passive torque on {name}");
+            }
+            loaded += 1;
+        }
+    }
+    eprintln!(
+        "{} hands: masses and centres within {worst_m:.1e} (of the heaviest body, of 0.1 m), gravity torques {worst_g:.1e}, hand-form passive torques {worst_p:.1e} on {loaded} configurations",
+        hands.len()
+    );
 }
 
 fn parse_err(text: &str) -> String {
@@ -470,4 +588,70 @@ fn an_actuator_on_a_tendon_held_fixed_moves_nothing() {
     let t = built.problem.transmission.as_ref().unwrap();
     assert_eq!(t.actuator_names, ["m"]);
     assert_eq!(t.matrix.as_slice(), [0.7]);
+}
+
+#[test]
+fn masses_that_cannot_be_computed_fail_only_gravity() {
+    let model = |body: &str, extra: &str| {
+        format!(
+            r#"<mujoco><compiler angle="radian" {extra}/><worldbody><body name="palm">
+            <body name="f" pos="0.02 0 0">{body}<joint name="j" axis="0 1 0"/><site name="tip" pos="0.03 0 0"/>
+            </body></body></worldbody></mujoco>"#
+        )
+    };
+    let gravity = |text: &str, g: serde_json::Value| -> Result<Vec<f64>, String> {
+        let dir = std::env::temp_dir().join(format!("gt-mass-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("h.xml"), text).unwrap();
+        let file: HandFile = serde_json::from_value(serde_json::json!({
+            "hand": {"model": "h.xml", "gravity": g},
+            "contacts": [{"site": "tip", "model": "fpc"}],
+            "wrench": [0, 0, 0, 0, 0, 0]
+        }))
+        .unwrap();
+        let out = file.into_problem(&dir);
+        std::fs::remove_dir_all(&dir).ok();
+        out.map(|p| p.problem.passive_torque.unwrap())
+            .map_err(|e| e.to_string())
+    };
+    let down = serde_json::json!("model");
+    // A 0.1 kg sphere 0.03 m out along x, under MuJoCo's default gravity, on a hinge
+    // about y: τ = (y × 0.03 x) · (0, 0, −9.81) · 0.1.
+    let sphere = r#"<geom type="sphere" size="0.01" pos="0.03 0 0" mass="0.1"/>"#;
+    let t = gravity(&model(sphere, ""), down.clone()).unwrap();
+    assert!((t[0] - 0.03 * 9.81 * 0.1).abs() <= 1e-15, "{t:?}");
+    // A mesh's mass and centre come from the mesh: loading works, gravity names it.
+    let mesh = r#"<geom type="mesh" mesh="m"/>"#;
+    let text = model(mesh, "");
+    assert!(Robot::parse_mjcf(&text, "h.xml", None).is_ok());
+    let e = gravity(&text, down.clone()).unwrap_err();
+    assert!(
+        e.contains("hand.gravity") && e.contains("link `f`") && e.contains("mesh"),
+        "{e}"
+    );
+    // … unless the body has an <inertial>, which `auto` prefers.
+    let both =
+        format!(r#"{mesh}<inertial pos="0.03 0 0" mass="0.1" diaginertia="1e-6 1e-6 1e-6"/>"#);
+    assert_eq!(gravity(&model(&both, ""), down.clone()).unwrap(), t);
+    // settotalmass scales every mass: one unknown makes all unknown.
+    let e = gravity(&model(mesh, r#"settotalmass="1""#), down.clone()).unwrap_err();
+    assert!(e.contains("settotalmass"), "{e}");
+    // A geom of the palm, which no joint moves, never matters.
+    let palm = model(sphere, "").replace(
+        "<body name=\"palm\">",
+        "<body name=\"palm\"><geom type=\"mesh\" mesh=\"m\"/>",
+    );
+    assert_eq!(gravity(&palm, down.clone()).unwrap(), t);
+    // Gravity from the file: <option gravity>; a floating hand's is not fixed.
+    let sideways =
+        model(sphere, "").replace("<worldbody>", r#"<option gravity="0 0 9.81"/><worldbody>"#);
+    assert_eq!(gravity(&sideways, down.clone()).unwrap(), vec![-t[0]]);
+    let floating =
+        model(sphere, "").replace("<body name=\"palm\">", "<body name=\"palm\"><freejoint/>");
+    let e = gravity(&floating, down).unwrap_err();
+    assert!(e.contains("hand.gravity") && e.contains("floating"), "{e}");
+    assert_eq!(
+        gravity(&floating, serde_json::json!([0, 0, -9.81])).unwrap(),
+        t
+    );
 }

@@ -59,15 +59,32 @@ fn jacobians_match_pinocchio() {
         );
         let mut worst: f64 = 0.0;
         let mut worst_f: f64 = 0.0;
+        let mut worst_g: f64 = 0.0;
         let model = cases[0]["problem"]["hand"]["model"].as_str().unwrap();
         let robot = Robot::load(&dir.join(model)).unwrap();
         for case in cases {
             // Every frame where Pinocchio puts it (the first cases).
             worst_f = worst_f.max(common::frame_error(&robot, case, model));
-            let file: HandFile = serde_json::from_value(case["problem"].clone()).unwrap();
+            let mut file: HandFile = serde_json::from_value(case["problem"].clone()).unwrap();
+            // The links' weight under the case's gravity, as passive torques.
+            file.hand.gravity = Some(case["gravity"].clone());
             let built = file.into_problem(&dir).unwrap();
             let p = &built.problem;
             let label = case["problem"]["name"].as_str().unwrap();
+            let weight: BTreeMap<String, f64> =
+                serde_json::from_value(case["gravity_torque"].clone()).unwrap();
+            let wscale = weight.values().fold(0.0f64, |a, v| a.max(v.abs()));
+            let got = p.passive_torque.as_ref().expect("gravity was asked for");
+            for (j, jname) in p.joint_names.iter().enumerate() {
+                let err = (got[j] - weight[jname]).abs();
+                assert!(
+                    err <= 1e-10 * wscale,
+                    "{label}: weight on {jname} {} vs Pinocchio {}",
+                    got[j],
+                    weight[jname]
+                );
+                worst_g = worst_g.max(err / wscale.max(f64::MIN_POSITIVE));
+            }
             let expect: BTreeMap<String, Vec<f64>> =
                 serde_json::from_value(case["jacobian_transpose"].clone()).unwrap();
             let scale = expect
@@ -125,7 +142,7 @@ fn jacobians_match_pinocchio() {
             }
         }
         eprintln!(
-            "{name}: {} configurations, worst Jᵀ error {worst:.1e} relative, frames {worst_f:.1e} (metres, rotation entries)",
+            "{name}: {} configurations, worst Jᵀ error {worst:.1e} relative, frames {worst_f:.1e} (metres, rotation entries), gravity torques {worst_g:.1e}",
             cases.len()
         );
     }
@@ -522,6 +539,62 @@ fn inertia_never_blocks_loading() {
         "{:?}",
         robot.warnings
     );
+}
+
+#[test]
+fn gravity_needs_the_moving_links_masses() {
+    // `a` is the root: its malformed mass weighs on no joint. `b` moves.
+    let text = urdf(&revolute("j1", "a", "b", ""), &["b"])
+        .replace(
+            "<link name=\"b\"/>",
+            "<link name=\"a\"><inertial><mass value=\"heavy\"/></inertial></link>\
+             <link name=\"b\"><inertial><origin xyz=\"0.1 0 0\"/><mass value=\"2\"/></inertial></link>",
+        );
+    let dir = std::env::temp_dir().join(format!("gt-gravity-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("r.urdf"), &text).unwrap();
+    let file = |gravity: serde_json::Value| -> Result<grasp_io::HandProblem, ProblemError> {
+        serde_json::from_value::<HandFile>(serde_json::json!({
+            "hand": {"model": "r.urdf", "gravity": gravity},
+            "contacts": [{"link": "b", "position": [0.1, 0, 0], "normal": [0, 0, 1], "model": "fpc"}],
+            "wrench": [0, 0, 1, 0, 0, 0]
+        }))
+        .unwrap()
+        .into_problem(&dir)
+    };
+    let p = file(serde_json::json!([0.0, -9.81, 0.0])).unwrap().problem;
+    let t = p.passive_torque.unwrap();
+    let r = Robot::parse(&text, "r.urdf").unwrap();
+    let axis = r.joints[0].axis.into_inner();
+    // 2 kg, 0.1 m out along x from the joint, under g along −y: (a × x) · g · m · 0.1.
+    let want = axis
+        .cross(&Vector3::x())
+        .dot(&Vector3::new(0.0, -9.81, 0.0))
+        * 0.2;
+    assert!((t[0] - want).abs() <= 1e-15 * 9.81, "{t:?} vs {want}");
+    let msg = |v: serde_json::Value| file(v).unwrap_err().to_string();
+    assert!(msg(serde_json::json!("model")).contains("a URDF has none"));
+    for bad in [
+        serde_json::json!([0, 0]),
+        serde_json::json!("down"),
+        serde_json::json!([0, 0, 1e300]),
+    ] {
+        let m = msg(bad.clone());
+        assert!(
+            m.contains("hand.gravity") && m.contains("[gx, gy, gz]"),
+            "{bad}: {m}"
+        );
+    }
+    // A malformed mass on a moving link: an error naming the link when gravity is asked.
+    let heavy = text.replace("<mass value=\"2\"/>", "<mass value=\"-2\"/>");
+    std::fs::write(dir.join("r.urdf"), &heavy).unwrap();
+    let m = msg(serde_json::json!([0.0, 0.0, -9.81]));
+    assert!(
+        m.contains("hand.gravity") && m.contains("link `b`") && m.contains("mass"),
+        "{m}"
+    );
+    assert!(file(serde_json::Value::Null).is_ok());
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 fn allegro_file(
