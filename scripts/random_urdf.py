@@ -5,8 +5,8 @@ Each model is a seeded random hand of two to four fingers that uses, at random, 
 the reader claims to read: joint origins with `xyz` and `rpy`, axes that are not unit
 length, revolute, continuous, prismatic and fixed joints (chains of fixed joints
 included), mimic joints (chains of them, negative multipliers, offsets), limits with
-a positive effort and with 0 (no limit), and `<joint>` elements listed in any order (before their
-links, shuffled). Pinocchio must load it; `oracle_urdf.py` then writes its Jᵀ, G and
+a positive effort and with 0 (no limit), `<inertial>` masses off the link frames (on
+most links), and `<joint>` elements listed in any order (before their links, shuffled). Pinocchio must load it; `oracle_urdf.py` then writes its Jᵀ, G and
 effort limits.
 
 Run from the repository root (pin 4.1.0 and numpy from PyPI; see oracle_urdf.py):
@@ -29,7 +29,18 @@ def fmt(v):
     return " ".join(f"{x:.6g}" for x in v)
 
 
-def hand(rng):
+def link(name, rng):
+    """A link, most with an <inertial> (its origin off the link frame, turned)."""
+    if rng.random() < 0.2:
+        return f'  <link name="{name}"/>'
+    i = rng.uniform(1e-6, 1e-5, 3)
+    return (f'  <link name="{name}"><inertial><origin xyz="{fmt(rng.uniform(-0.02, 0.02, 3))}" '
+            f'rpy="{fmt(rng.uniform(-3, 3, 3))}"/><mass value="{rng.uniform(0.005, 0.1):.6g}"/>'
+            f'<inertia ixx="{i[0]:.6g}" ixy="0" ixz="0" iyy="{i[1]:.6g}" iyz="0" izz="{i[2]:.6g}"/>'
+            '</inertial></link>')
+
+
+def hand(rng, mrng):
     links = ["palm"]
     joints = []  # (xml, name, kind)
     movable = []  # (name, finger)
@@ -80,7 +91,7 @@ def hand(rng):
             lead, mult, off = mimic[name]
             xml = xml + [f'<mimic joint="{lead}" multiplier="{mult:.6g}" offset="{off:.6g}"/>']
         body.append("  " + "".join(xml) + "</joint>")
-    link_xml = [f'  <link name="{l}"/>' for l in links]
+    link_xml = [link(name, mrng) for name in links]
     # Joints before their links, or after.
     out += (body + link_xml) if rng.random() < 0.5 else (link_xml + body)
     out.append("</robot>")
@@ -95,7 +106,8 @@ def main():
     while written < MODELS:
         seed += 1
         rng = np.random.default_rng(2000 + seed)
-        text, tips = hand(rng)
+        # Masses from their own stream: the kinematics stay as drawn.
+        text, tips = hand(rng, np.random.default_rng(9000 + seed))
         path = os.path.join(OUT, f"random-{written}.urdf")
         with open(path, "w") as f:
             f.write('<?xml version="1.0"?>\n'

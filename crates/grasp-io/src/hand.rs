@@ -170,6 +170,10 @@ pub struct HandReport {
     /// (`forcerange`, `ctrlrange` × gain, or `none`), whether or not limits are used.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub actuator_limits: Vec<ActuatorLimit>,
+    /// The acceleration of gravity on the links, in the root frame, when the links'
+    /// weight is part of the passive torques.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gravity: Option<[f64; 3]>,
     /// What was loaded but ignored, or looks wrong (one line each).
     pub warnings: Vec<String>,
 }
@@ -297,6 +301,7 @@ impl HandFile {
                 torque_limits: grasps.limits_from,
                 unlimited_joints: grasps.unlimited_joints.clone(),
                 actuator_limits: grasps.actuator_limits.clone(),
+                gravity: grasps.gravity.map(Into::into),
                 warnings,
             },
         })

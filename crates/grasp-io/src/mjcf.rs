@@ -24,9 +24,11 @@
 //! free body without (an object of the scene) stays where the file puts it; `<frame>` moves the
 //! bodies and sites it holds. `free` and `ball` joints inside the tree, `<composite>`,
 //! `<flexcomp>`, `<replicate>`, `<attach>` and `<equality><connect>` change the
-//! kinematics and are errors. Meshes, textures and assets are never opened, and a geom
-//! is read only when a spatial tendon an actuator pulls on wraps it; other elements are ignored, with one
-//! warning per element name.
+//! kinematics and are errors. Meshes, textures and assets are never opened. A geom
+//! matters when a spatial tendon wraps it, and for its body's mass (`<inertial>`, or
+//! the geoms' as MuJoCo's compiler computes them, [`crate::mass`]); a geom or inertial
+//! that cannot be read fails only what needs it (a tendon, gravity). Other elements are
+//! ignored, with one warning per element name.
 
 use crate::mass::LinkMass;
 use crate::tendon::{PathPoint, SpatialTendon, Spring, SpringOn, WrapGeom, WrapShape};
@@ -944,6 +946,9 @@ impl Ctx<'_> {
             Some(m) => m,
             None => v.leading("density", 1).map_err(at)?.unwrap_or(1000.0) * volume,
         };
+        if mass < 0.0 {
+            return Err(format!("{here}: a negative mass ({mass})"));
+        }
         let centre = (offset * v.placement(self.c).map_err(at)?)
             .translation
             .vector;
