@@ -132,6 +132,49 @@ fn hand_command_lists_joints_mimics_and_chains() {
     );
 }
 
+#[test]
+fn the_fingers_weight_enters_as_passive_torques() {
+    let dir = temp_dir();
+    let mut pinch: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(fixture("hands/allegro-pinch.json")).unwrap(),
+    )
+    .unwrap();
+    pinch["hand"]["model"] = fixture("urdf/allegro/allegro_hand_right.urdf").into();
+    // The palm faces down: gravity is +x in the root frame (the fixture's description).
+    pinch["hand"]["gravity"] = serde_json::json!([9.81, 0, 0]);
+    let path = dir.join("pinch-weight.json");
+    std::fs::write(&path, pinch.to_string()).unwrap();
+    let p = path.to_str().unwrap();
+    let solved = json(&run(&["solve", p, "--format", "json"]));
+    assert_eq!(solved["status"], "optimal");
+    assert_eq!(
+        solved["hand"]["gravity"],
+        serde_json::json!([9.81, 0.0, 0.0])
+    );
+    // Jᵀ f = τ + τ_p, with τ_p the matrix form's passive_torque.
+    let built: serde_json::Value = serde_json::from_slice(&run(&["build", p]).stdout).unwrap();
+    let tp: Vec<f64> = serde_json::from_value(built["passive_torque"].clone()).unwrap();
+    let jt: Vec<Vec<f64>> = serde_json::from_value(built["jacobian_transpose"].clone()).unwrap();
+    let f: Vec<Vec<f64>> = serde_json::from_value(solved["contact_forces"].clone()).unwrap();
+    let f: Vec<f64> = f.concat();
+    let tau: Vec<f64> = serde_json::from_value(solved["torque"].clone()).unwrap();
+    let scale = tp.iter().chain(&tau).fold(0.0f64, |a, v| a.max(v.abs()));
+    assert!(tp.iter().any(|&t| t.abs() > 1e-3 * scale), "{tp:?}");
+    for (j, row) in jt.iter().enumerate() {
+        let jf: f64 = row.iter().zip(&f).map(|(a, b)| a * b).sum();
+        assert!((jf - tau[j] - tp[j]).abs() <= 1e-12 * scale, "row {j}");
+    }
+    let text = String::from_utf8_lossy(&run(&["solve", p]).stdout).into_owned();
+    assert!(
+        text.contains("passive joint torques τ_p") && text.contains("produce f with τ_p"),
+        "{text}"
+    );
+    // A URDF gives no gravity of its own.
+    pinch["hand"]["gravity"] = "model".into();
+    std::fs::write(&path, pinch.to_string()).unwrap();
+    assert_rejected(&run(&["solve", p]), &["hand.gravity", "a URDF has none"]);
+}
+
 fn assert_rejected(out: &Output, needles: &[&str]) {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "stderr: {err}");

@@ -324,6 +324,28 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
             let _ = writeln!(o, "  {n:<width$}  {shown:>13}");
         }
     }
+    let passive = &model.passive.joint_torque;
+    if !passive.is_empty() {
+        let _ = writeln!(
+            o,
+            "\npassive joint torques τ_p (springs, the links' weight): Jᵀ f = τ + τ_p"
+        );
+        let names: Vec<String> = match &model.actuators {
+            Some(a) => (0..a.joints())
+                .map(|j| {
+                    a.joint_names
+                        .get(j)
+                        .cloned()
+                        .unwrap_or_else(|| format!("joint {j}"))
+                })
+                .collect(),
+            None => names.clone(),
+        };
+        let width = names.iter().map(|n| n.chars().count()).max().unwrap_or(0);
+        for (n, t) in names.iter().zip(passive) {
+            let _ = writeln!(o, "  {n:<width$}  {:>13}", g(*t, 7));
+        }
+    }
     // Components below the check's tolerance of the largest force are rounding.
     let fmax = s
         .contact_forces
@@ -395,18 +417,19 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
             )
         }
     );
+    let with = if passive.is_empty() { "" } else { " with τ_p" };
     let _ = writeln!(
         o,
         "  ‖Jᵀf − τ‖∞  {:>10}   {}",
         g(d.torque_residual, 3),
         if d.torque_check <= 1.0 {
             format!(
-                "(the joints produce f: {} of the tolerance)",
+                "(the joints produce f{with}: {} of the tolerance)",
                 share(d.torque_check)
             )
         } else {
             format!(
-                "(the joints do NOT produce f: {}× the tolerance)",
+                "(the joints do NOT produce f{with}: {}× the tolerance)",
                 g(d.torque_check, 2)
             )
         }
