@@ -870,6 +870,24 @@ impl HandGrasps<'_> {
                 }
             }
         }
+        // The model's numbers (masses, stiffnesses) may be in range while their
+        // torques are not: named here rather than as the derived `passive_torque`.
+        for (r, v) in out.iter_mut().enumerate() {
+            *v = flush_subnormal(*v);
+            if !v.is_finite() || v.abs() > MAX_MAGNITUDE {
+                let (field, what) = match self.gravity {
+                    Some(_) => ("hand.gravity", "springs' and links' weight"),
+                    None => ("hand.model", "springs'"),
+                };
+                return Err(ProblemError::invalid(
+                    field,
+                    format!(
+                        "a model whose {what} torques are at most {MAX_MAGNITUDE:e} in magnitude"
+                    ),
+                    format!("{v:e} on joint `{}`", self.template.joint_names[r]),
+                ));
+            }
+        }
         Ok(Some(out))
     }
 

@@ -410,9 +410,10 @@ fn unknown_elements_warn_once_and_degrees_are_the_default() {
 }
 
 /// Mutated and truncated MJCF loads or fails with a named error, never a panic; what
-/// loads also builds a hand problem or fails with a named error. Two bases: the test
-/// hand (tendons, couplings, every frame form) and Menagerie's Shadow hand (nested
-/// default classes, position actuators on tendons, autolimits).
+/// loads also builds a hand problem with the links' weight or fails with a named
+/// error. Three bases: the test hand (tendons, couplings, every frame form),
+/// Menagerie's Shadow hand (nested default classes, position actuators on tendons,
+/// autolimits) and a random hand with masses in every form.
 #[test]
 fn mutated_mjcf_never_panics() {
     mutate(
@@ -445,6 +446,28 @@ fn mutated_mjcf_never_panics() {
         ],
         67890,
     );
+    // Masses in every form, asked for by gravity.
+    mutate(
+        "fixtures/mjcf/gravity/spatial-4.xml",
+        serde_json::json!([
+            {"site": "f0_tip", "model": "pcwf", "mu": 0.5},
+            {"site": "f1_tip", "model": "pcwf", "mu": 0.5}
+        ]),
+        &[
+            "mass=\"-1\"",
+            "type=\"mesh\"",
+            "fromto=\"0 0 0 0 0 0\"",
+            "size=\"1e12 1e12 1e12\"",
+            "density=\"1e12\"",
+            "<compiler inertiafromgeom=\"true\" settotalmass=\"1e-300\" boundmass=\"1e12\"/>",
+            "gravcomp=\"1e12\"",
+            "<inertial pos=\"0 0 0\" mass=\"nan\"/>",
+            "<option gravity=\"1e12 0 0\"/>",
+            "shellinertia=\"true\"",
+            "group=\"-3\"",
+        ],
+        24680,
+    );
 }
 
 fn mutate(base: &str, contacts: serde_json::Value, extra: &[&str], seed: u64) {
@@ -473,7 +496,7 @@ fn mutate(base: &str, contacts: serde_json::Value, extra: &[&str], seed: u64) {
     ];
     pieces.extend_from_slice(extra);
     let file: HandFile = serde_json::from_value(serde_json::json!({
-        "hand": {"model": "mutated.xml"},
+        "hand": {"model": "mutated.xml", "gravity": [0, 0, -9.81]},
         "contacts": contacts,
         "wrench": [0, 0, -1, 0, 0, 0],
         "torque_limits": "model"
@@ -653,5 +676,12 @@ fn masses_that_cannot_be_computed_fail_only_gravity() {
     assert_eq!(
         gravity(&floating, serde_json::json!([0, 0, -9.81])).unwrap(),
         t
+    );
+    // Masses within the input domain whose torques are not: named as gravity's.
+    let huge = r#"<geom type="box" size="1e12 1e12 1e12" pos="0.03 0 0" density="1e12"/>"#;
+    let e = gravity(&model(huge, ""), serde_json::json!("model")).unwrap_err();
+    assert!(
+        e.contains("hand.gravity") && e.contains("on joint `j`"),
+        "{e}"
     );
 }
