@@ -12,8 +12,12 @@ solved for the fixture's wrench, alternating, best of ``--rounds``:
 
 Before timing, the answers must agree: statuses equal, objectives bit for bit.
 
+With ``--gravity``, it measures instead what the fingers' weight costs: ``Hand.solve_batch``
+on one thread with ``gravity`` and without, interleaved, after checking that the batch
+with gravity equals ``solve_batch`` on ``Hand.arrays``' G, Jᵀ and passive torques.
+
 Run (after ``pip install ./python``, from the repository root):
-    python scripts/bench_hand_batch.py [--grasps 20000] [--loop-grasps 1000] [--rounds 3]
+    python scripts/bench_hand_batch.py [--grasps 20000] [--loop-grasps 1000] [--rounds 3] [--gravity]
 """
 
 import argparse
@@ -65,12 +69,47 @@ def rate(n, f):
     return n / (time.perf_counter() - t)
 
 
+# Gravity in each fixture's root frame: the Allegro pinch's palm faces down (+x, its
+# description); the MJCF hand's file gives its own; the Ability hand's is a choice.
+GRAVITY = {"allegro-pinch": [9.81, 0.0, 0.0], "shadow-tripod": "model",
+           "ability-tripod": [0.0, 0.0, -9.81]}
+
+
+def gravity_cost(a):
+    print(f"cores: {os.cpu_count()}, grasp_torque {gt.__version__}; grasps per second, 1 thread")
+    print("| hand | without gravity | with gravity | cost | optimal without / with |")
+    print("|---|---|---|---|---|")
+    for name, g in GRAVITY.items():
+        d, hand, q, P, N, pose, W = candidates(name, a.grasps, 1)
+        kw = dict(positions=P, normals=N, object_pose=pose, torque_limits=d.get("torque_limits"),
+                  threads=1)
+        heavy = hand.solve_batch(q, W, d["contacts"], gravity=g, **kw)
+        light = hand.solve_batch(q, W, d["contacts"], **kw)
+        arr = hand.arrays(q, d["contacts"], positions=P, normals=N, object_pose=pose, gravity=g)
+        m = gt.Problem.from_dict(as_dict(d, hand, q, P, N, 0)).to_dict()
+        models = [{k: c[k] for k in ("model", "mu", "mu_torsion") if k in c} for c in d["contacts"]]
+        via = gt.solve_batch(arr.G, arr.JT, W, models, transmission=arr.transmission,
+                             passive_torque=arr.passive_torque,
+                             torque_limits=m.get("torque_limits"))
+        assert np.array_equal(via.objective, heavy.objective, equal_nan=True), name
+        best = {"light": 0.0, "heavy": 0.0}
+        for _ in range(a.rounds):
+            best["light"] = max(best["light"], rate(a.grasps, lambda: hand.solve_batch(q, W, d["contacts"], **kw)))
+            best["heavy"] = max(best["heavy"], rate(a.grasps, lambda: hand.solve_batch(
+                q, W, d["contacts"], gravity=g, **kw)))
+        print(f"| {name} | {best['light']:.0f} | {best['heavy']:.0f} | "
+              f"{best['light'] / best['heavy']:.2f}× | {(light.status == 0).sum()} / {(heavy.status == 0).sum()} |")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--grasps", type=int, default=20000)
     ap.add_argument("--loop-grasps", type=int, default=1000)
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--gravity", action="store_true")
     a = ap.parse_args()
+    if a.gravity:
+        return gravity_cost(a)
     print(f"cores: {os.cpu_count()}, grasp_torque {gt.__version__}; grasps per second")
     print("| hand | outputs | `Hand.solve_batch`, all cores | `Hand.solve_batch`, 1 thread | arrays `solve_batch`, 1 thread | `from_dict` loop | hand batch / loop (1 thread) | hand / arrays (1 thread) |")
     print("|---|---|---|---|---|---|---|---|")

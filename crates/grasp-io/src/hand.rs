@@ -631,8 +631,16 @@ impl HandFile {
         }
         let gravity = self.hand.gravity(robot)?;
         if gravity.is_some() {
-            // Every link's weight loads some joint: all are posed.
-            needed.fill(true);
+            // The links a problem's joint carries are posed for their weight; the
+            // others load only joints outside the problem.
+            for l in 0..robot.links.len() {
+                let loads = robot.chain(l).iter().any(|&j| {
+                    robot.coupling[j].is_some_and(|c| row_of[c.independent] != usize::MAX)
+                });
+                if loads {
+                    robot.mark_ancestors(l, &mut needed);
+                }
+            }
         }
         let mut grasps = HandGrasps {
             gravity,
