@@ -326,10 +326,7 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
     }
     let passive = &model.passive.joint_torque;
     if !passive.is_empty() {
-        let _ = writeln!(
-            o,
-            "\npassive joint torques τ_p (springs, the links' weight): Jᵀ f = τ + τ_p"
-        );
+        let _ = writeln!(o, "\npassive joint torques τ_p: Jᵀ f = τ + τ_p");
         let names: Vec<String> = match &model.actuators {
             Some(a) => (0..a.joints())
                 .map(|j| {

@@ -27,7 +27,7 @@ fn run(p: &GraspProblem, cones: Cones) -> Solution {
 enum Unit {
     /// Contact forces measured in units of 1/c: G and Jᵀ times c.
     Force,
-    /// Torques in units of 1/c: Jᵀ, torque limits (and τ) times c.
+    /// Torques in units of 1/c: Jᵀ, torque limits, passive torques (and τ) times c.
     Torque,
     /// Forces, moments and torques all in units of 1/c, lengths unchanged: G, Jᵀ, the
     /// wrench and torque limits times c, contact forces unchanged.
@@ -54,6 +54,9 @@ fn rescaled(p: &GraspProblem, unit: Unit, c: f64) -> (GraspProblem, f64) {
             if let Some(t) = &mut q.initial_torque {
                 t.iter_mut().for_each(|v| *v *= c);
             }
+            if let Some(t) = &mut q.passive_torque {
+                t.iter_mut().for_each(|v| *v *= c);
+            }
             if matches!(unit, Unit::Everything) {
                 scale(&mut q.grasp_matrix);
                 q.wrench.iter_mut().for_each(|v| *v *= c);
@@ -76,6 +79,7 @@ fn within_bound(q: &GraspProblem) -> bool {
         .chain(q.jacobian_transpose.as_slice())
         .chain(&q.wrench)
         .chain(q.min_normal_force.iter().flatten())
+        .chain(q.passive_torque.iter().flatten())
         .chain(limits)
         .all(|&v| grasp_torque::problem::in_domain(v))
 }

@@ -66,6 +66,65 @@ fn bundled_hands_solve_from_the_library() {
     }
 }
 
+/// The Aero pinch: a tendon-driven hand whose springs load the joints. The answer
+/// satisfies the user's statics, `G f = w` and `Jᵀ f = T u + τ_p`, recomputed from the
+/// problem's own matrices; exact cones cost less than inscribed ones; the springs
+/// matter (without them the tendons would pull otherwise).
+#[test]
+fn the_aero_pinch_holds_against_its_springs() {
+    use grasp_torque::Cones;
+    let p = load(fixture("aero-pinch.json")).unwrap().problem;
+    let tp = p.passive_torque.clone().expect("the Aero hand has springs");
+    let t = &p.transmission.as_ref().expect("tendons drive it").matrix;
+    let tmax = tp.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    assert!(tmax > 0.1, "{tp:?}");
+    let solve = |p: &grasp_torque::GraspProblem, cones| {
+        let config = SolverConfig {
+            cones,
+            ..Default::default()
+        };
+        GraspSolver::new(p, &config)
+            .unwrap()
+            .solve(&p.wrench, &WarmStart::default())
+            .unwrap()
+            .clone()
+    };
+    let linear = solve(&p, Cones::Linear);
+    let exact = solve(&p, Cones::Exact);
+    for s in [&linear, &exact] {
+        assert!(s.is_optimal(), "{:?} {:?}", s.status, s.reason);
+        let f = &s.contact_forces;
+        let fmax = f.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        for j in 0..p.joints() {
+            let jtf: f64 = (0..p.force_dim())
+                .map(|c| p.jacobian_transpose[(j, c)] * f[c])
+                .sum();
+            let tu: f64 = (0..t.ncols()).map(|a| t[(j, a)] * s.torque[a]).sum();
+            assert!(
+                (jtf - tu - tp[j]).abs() <= 1e-12 * (fmax + tmax),
+                "joint {j}"
+            );
+        }
+        for r in 0..6 {
+            let gf: f64 = (0..p.force_dim())
+                .map(|c| p.grasp_matrix[(r, c)] * f[c])
+                .sum();
+            assert!((gf - p.wrench[r]).abs() <= 1e-12 * fmax, "wrench row {r}");
+        }
+    }
+    assert!(exact.objective <= linear.objective);
+    let mut weightless = p.clone();
+    weightless.passive_torque = None;
+    let without = solve(&weightless, Cones::Linear);
+    assert!(
+        !without.is_optimal()
+            || (without.objective - linear.objective).abs() > 1e-3 * linear.objective,
+        "{:?} {}",
+        without.status,
+        without.objective
+    );
+}
+
 /// The MJCF oracle's hands with springs and spatial tendons (the Aero hand and the
 /// random `spatial-*` hands; fixtures/mjcf/oracle): every configuration's grasp, with
 /// its passive torques, on both cone forms, ends optimal or infeasible with the native

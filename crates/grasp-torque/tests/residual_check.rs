@@ -1,7 +1,8 @@
 //! The core's residual check against a plain recomputation: on every bundled grasp
-//! (the Shadow tripod with its transmission among them), the reported residuals equal
-//! `‖G f − w‖∞`, `‖[E; Jᵀ] f − [0; τ]‖∞` with the joint-space `‖Jᵀ f − T u‖∞`, and
-//! `‖C τ − e‖∞`, each formed here row by row from the model's matrices; and an answer
+//! (the Shadow tripod with its transmission among them, the Aero pinch with its
+//! springs), the reported residuals equal `‖G f − w‖∞`, `‖[E; Jᵀ] f − [0; τ]‖∞` with the
+//! joint-space `‖Jᵀ f − T u‖∞`, and `‖C τ − e‖∞` (each target moved by the passive
+//! torques), formed here row by row from the model's matrices; and an answer
 //! moved off its optimum along one joint is no longer called optimal.
 #![cfg(feature = "active-set")]
 
@@ -24,12 +25,26 @@ fn check_against_plain(s: &Solution, solver: &GraspSolver, w: &[f64; 6], label: 
     let (f, tau) = (&s.contact_forces, &s.torque);
     let d = &s.diagnostics;
     let eps = 64.0 * f64::EPSILON * (f.len() + tau.len() + 6) as f64;
+    // Passive torques τ_p move the targets: E f = Q₂ᵀ τ_p, T⁺Jᵀ f = u + T⁺ τ_p,
+    // Jᵀ f = T u + τ_p and C u − e(w) = e_p (all zero without them).
+    let pas = &model.passive;
+    let k = model.unactuated.nrows();
+    let target = |i: usize| pas.row_targets.get(i).copied().unwrap_or(0.0);
     let (wr, ws) = residual(&model.grasp_matrix, f, w);
-    let (tr, ts) = residual(&model.jacobian_transpose, f, tau);
-    let (er, es) = residual(&model.unactuated, f, &[]);
+    let rows: Vec<f64> = (0..tau.len()).map(|j| tau[j] + target(k + j)).collect();
+    let (tr, ts) = residual(&model.jacobian_transpose, f, &rows);
+    let (er, es) = residual(
+        &model.unactuated,
+        f,
+        &(0..k).map(target).collect::<Vec<_>>(),
+    );
     let (mut tr, mut ts) = (tr.max(er), ts.max(es));
     if let Some(a) = &model.actuators {
-        let joint = a.transmission.mul_vec(tau);
+        let mut joint = a.transmission.mul_vec(tau);
+        joint
+            .iter_mut()
+            .zip(&pas.joint_torque)
+            .for_each(|(j, p)| *j += p);
         let (jr, js) = residual(&a.joint_jacobian_transpose, f, &joint);
         let (_, us) = residual(&a.transmission, tau, &[]);
         tr = tr.max(jr);
@@ -44,6 +59,7 @@ fn check_against_plain(s: &Solution, solver: &GraspSolver, w: &[f64; 6], label: 
                 .zip(w)
                 .map(|(a, b)| a * b)
                 .sum::<f64>()
+                + pas.eq_offset.get(i).copied().unwrap_or(0.0)
         })
         .collect();
     let (cr, cs) = residual(&model.eq, tau, &e);
