@@ -112,6 +112,20 @@ fn hand_command_lists_joints_mimics_and_chains() {
         "{text}"
     );
     assert!(text.contains("thumb_tip: thumb_q1, thumb_q2"), "{text}");
+    assert!(
+        text.contains("masses (for hand.gravity):") && text.contains("gravity in the file: none"),
+        "{text}"
+    );
+    // The masses a gravity oracle hand carries, and its file's gravity.
+    let m = json(&run(&[
+        "hand",
+        &fixture("mjcf/gravity/spatial-3.xml"),
+        "--format",
+        "json",
+    ]));
+    assert_eq!(m["gravity"].as_array().unwrap().len(), 3);
+    assert!(!m["masses"].as_array().unwrap().is_empty());
+    assert!(m["unknown_masses"].as_array().unwrap().is_empty());
     let v = json(&run(&[
         "hand",
         &fixture("urdf/test/linkage_gripper.urdf"),

@@ -3,6 +3,7 @@
 use super::format::g;
 use super::Format;
 use anyhow::Result;
+use grasp_torque::mass::LinkMass;
 use grasp_torque::urdf::{Drive, JointKind, Robot};
 use serde_json::json;
 use std::path::PathBuf;
@@ -42,6 +43,16 @@ pub(crate) fn run(args: &HandArgs) -> Result<u8> {
             (l, c)
         })
         .collect();
+    // The links' masses, for `hand.gravity`.
+    let (mut known, mut unknown) = (Vec::new(), Vec::new());
+    for (l, m) in robot.masses.iter().enumerate() {
+        match m {
+            LinkMass::Known { mass, com } if *mass > 0.0 => known.push((l, *mass, *com)),
+            LinkMass::Unknown(why) => unknown.push((l, why)),
+            _ => {}
+        }
+    }
+    let total: f64 = known.iter().map(|k| k.1).sum();
     let leader = |j: usize| {
         let c = robot.coupling[j].expect("a moving joint has a coupling");
         (joint(robot.independent[c.independent]).name.clone(), c)
@@ -88,6 +99,13 @@ pub(crate) fn run(args: &HandArgs) -> Result<u8> {
                     }
                     v
                 }).collect::<Vec<_>>(),
+                "masses": known.iter().map(|(l, m, c)| json!({
+                    "link": robot.links[*l], "mass": m, "com": [c.x, c.y, c.z],
+                })).collect::<Vec<_>>(),
+                "unknown_masses": unknown.iter().map(|(l, why)| json!({
+                    "link": robot.links[*l], "why": why,
+                })).collect::<Vec<_>>(),
+                "gravity": robot.gravity.map(|g| [g.x, g.y, g.z]),
                 "warnings": robot.warnings,
             });
             outln!("{}", serde_json::to_string_pretty(&v)?);
@@ -185,6 +203,20 @@ pub(crate) fn run(args: &HandArgs) -> Result<u8> {
             if !robot.sites.is_empty() {
                 let names: Vec<&str> = robot.sites.iter().map(|s| s.name.as_str()).collect();
                 outln!("\nsites ({}): {}", names.len(), names.join(", "));
+            }
+            outln!(
+                "\nmasses (for hand.gravity): {} over {} links; gravity in the file: {}",
+                g(total, 6),
+                known.len(),
+                robot.gravity.map_or("none".into(), |v| format!(
+                    "[{}, {}, {}]",
+                    g(v.x, 6),
+                    g(v.y, 6),
+                    g(v.z, 6)
+                ))
+            );
+            for (l, why) in &unknown {
+                outln!("  unknown: {}: {why}", robot.links[*l]);
             }
             outln!("\nchains (end link: the independent joints that move it, root first)");
             for (l, c) in &chains {

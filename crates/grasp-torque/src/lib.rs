@@ -2,8 +2,8 @@
 
 pub use grasp_core::*;
 pub use grasp_io::{
-    file, geometry, hand, load, load_problem, parse_problem, parse_problem_at, urdf, HandFile,
-    Loaded, ProblemParser, Robot,
+    file, geometry, hand, load, load_problem, mass, parse_problem, parse_problem_at, urdf,
+    HandFile, Loaded, ProblemParser, Robot,
 };
 
 #[cfg(feature = "active-set")]
