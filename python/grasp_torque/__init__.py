@@ -672,10 +672,11 @@ class Hand:
         object_pose=None,
         gravity=None,
     ) -> HandArrays:
-        """Each grasp's G, Jᵀ and spring torques (as ``solve_batch`` poses them, same
-        arguments), for ``gt.solve_batch``, another solver or a grasp-quality measure. G's columns are
-        the contacts' force components in their frames (``docs/geometry.md``), in the
-        object frame about its origin; JT's rows are ``joint_names``."""
+        """Each grasp's G, Jᵀ and passive torques (the springs', and the links' weight
+        with ``gravity``), posed as ``solve_batch`` poses them (same arguments), for
+        ``gt.solve_batch``, another solver or a grasp-quality measure. G's columns are the
+        contacts' force components in their frames (``docs/geometry.md``), in the object
+        frame about its origin; JT's rows are ``joint_names``."""
         q, P, N, pose = self._poses(joint_positions, positions, normals, object_pose)
         spec_json = _dumps({"contacts": _contacts(contacts), "gravity": _gravity(gravity)})
         d = json.loads(self._native.describe(spec_json))
