@@ -892,7 +892,10 @@ impl HandGrasps<'_> {
                     format!(
                         "a model whose {what} torques are at most {MAX_MAGNITUDE:e} in magnitude"
                     ),
-                    format!("{v:e} on joint `{}`", self.template.joint_names[r]),
+                    format!(
+                        "{v:e} on joint `{}`",
+                        self.template.joint_names.get(r).map_or("?", String::as_str)
+                    ),
                 ));
             }
         }

@@ -1023,31 +1023,34 @@ fn body_masses(
     links: usize,
 ) -> Vec<LinkMass> {
     let mut out = vec![LinkMass::None; links];
+    // Per link, its geoms in the groups.
+    let mut on: Vec<Vec<&PointMass>> = vec![Vec::new(); links];
+    for (l, g) in geoms {
+        if let Some(g) = g {
+            on[*l].push(g);
+        }
+    }
     let mut known = Vec::with_capacity(bodies.len());
     for b in bodies {
         // Nothing gives the body mass: MuJoCo puts its inertial frame (where
         // `boundmass` sits) at the body's `pos` attribute, read in the body's own
         // frame (MuJoCo 3.3's compiled `body_ipos`).
         let nothing = Ok((0.0, b.pos));
+        let has_geoms = !on[b.link].is_empty();
         let from_geoms = || -> PointMass {
-            let (mut m, mut first, mut any) = (0.0, Vector3::zeros(), false);
-            for (_, g) in geoms.iter().filter(|(l, _)| *l == b.link) {
-                if let Some(g) = g {
-                    let (gm, at) = g.clone()?;
-                    m += gm;
-                    first += gm * at;
-                    any = true;
-                }
+            if !has_geoms {
+                return nothing.clone();
             }
-            if any {
-                Ok((m, if m > 0.0 { first / m } else { Vector3::zeros() }))
-            } else {
-                nothing.clone()
+            let (mut m, mut first) = (0.0, Vector3::zeros());
+            for g in &on[b.link] {
+                let (gm, at) = (*g).clone()?;
+                m += gm;
+                first += gm * at;
             }
+            Ok((m, if m > 0.0 { first / m } else { Vector3::zeros() }))
         };
         // `true` prefers the geoms over an <inertial>, which still serves a body
         // without geoms in the groups.
-        let has_geoms = geoms.iter().any(|(l, g)| *l == b.link && g.is_some());
         let mass = match (c.inertia_from_geom, &b.inertial) {
             (Some(true), Some(i)) if !has_geoms => i.clone(),
             (Some(true), _) | (None, None) => from_geoms(),
