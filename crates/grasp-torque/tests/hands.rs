@@ -126,8 +126,9 @@ fn the_aero_pinch_holds_against_its_springs() {
 }
 
 /// The MJCF oracle's hands with springs and spatial tendons (the Aero hand and the
-/// random `spatial-*` hands; fixtures/mjcf/oracle): every configuration's grasp, with
-/// its passive torques, on both cone forms, ends optimal or infeasible with the native
+/// random `spatial-*` hands; fixtures/mjcf/oracle), the spatial hands also with masses
+/// and gravity: every configuration's grasp, with its passive torques, on both cone
+/// forms, ends optimal or infeasible with the native
 /// solver, never in a failed check, and Clarabel agrees where it ends so. (A random
 /// hand with an unloaded finger whose joints shared actuators with loaded ones was
 /// refused by the joint-space check: its rows' own terms were rounding.)
@@ -147,9 +148,30 @@ fn spring_and_tendon_hands_end_optimal_or_infeasible() {
     for name in &names {
         let text = std::fs::read_to_string(format!("{dir}/{name}")).unwrap();
         let oracle: serde_json::Value = serde_json::from_str(&text).unwrap();
+        // The spatial hands again with masses (fixtures/mjcf/gravity: the same
+        // kinematics) and their weight under the file's gravity.
+        let mut problems: Vec<serde_json::Value> = Vec::new();
         for case in oracle["cases"].as_array().unwrap() {
-            let label = case["problem"]["name"].as_str().unwrap();
-            let p = parse_problem_at(&case["problem"].to_string(), std::path::Path::new(&dir))
+            problems.push(case["problem"].clone());
+            if name.starts_with("spatial-") {
+                let mut heavy = case["problem"].clone();
+                let model = heavy["hand"]["model"]
+                    .as_str()
+                    .unwrap()
+                    .replace("/random/", "/gravity/");
+                heavy["hand"]["model"] = model.into();
+                heavy["hand"]["gravity"] = "model".into();
+                heavy["name"] = format!(
+                    "{label} with gravity",
+                    label = heavy["name"].as_str().unwrap()
+                )
+                .into();
+                problems.push(heavy);
+            }
+        }
+        for problem in &problems {
+            let label = problem["name"].as_str().unwrap();
+            let p = parse_problem_at(&problem.to_string(), std::path::Path::new(&dir))
                 .unwrap()
                 .problem;
             springs += usize::from(p.passive_torque.is_some());
