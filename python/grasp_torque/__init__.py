@@ -266,6 +266,10 @@ class Problem:
     wrench = property(lambda self: self._p.wrench, doc="The problem's wrench w.")
     grasp_matrix = property(lambda self: self._p.grasp_matrix, doc="G, 6 × n.")
     jacobian_transpose = property(lambda self: self._p.jacobian_transpose, doc="Jᵀ, m × n.")
+    passive_torque = property(
+        lambda self: self._p.passive_torque,
+        doc="τ_p per joint (a hand's springs and, with gravity, its links' weight), or None.",
+    )
 
     def __reduce__(self):
         hand = self._p.hand_json()

@@ -115,6 +115,15 @@ impl Problem {
     fn jacobian_transpose<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         matrix(py, &self.inner.jacobian_transpose)
     }
+
+    /// τ_p per joint (springs, the links' weight), or None.
+    #[getter]
+    fn passive_torque<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.inner
+            .passive_torque
+            .as_ref()
+            .map(|t| t.clone().into_pyarray(py))
+    }
 }
 
 fn matrix<'py>(py: Python<'py>, m: &Matrix) -> Bound<'py, PyArray2<f64>> {

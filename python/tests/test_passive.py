@@ -137,3 +137,16 @@ def test_a_hands_weight_is_pinocchios_and_solves_as_passive_torques():
         hand.arrays(Q, contacts, gravity="model")
     with pytest.raises(ValueError, match="gravity: expected"):
         hand.arrays(Q, contacts, gravity=[0, 0])
+
+
+def test_a_hand_form_problem_shows_its_passive_torques():
+    d = json.loads((ROOT / "fixtures/hands/aero-pinch.json").read_text())
+    p = gt.Problem.load(ROOT / "fixtures/hands/aero-pinch.json")
+    assert p.passive_torque is not None and np.abs(p.passive_torque).max() > 0.1
+    np.testing.assert_array_equal(p.passive_torque, p.to_dict()["passive_torque"])
+    r = gt.Solver(p).solve()
+    f = r.contact_forces
+    T = np.array(p.to_dict()["transmission"])
+    np.testing.assert_allclose(p.jacobian_transpose @ f, T @ r.torque + p.passive_torque, rtol=0, atol=1e-12)
+    assert gt.Problem.load(ROOT / "fixtures/hand3-pcwf.json").passive_torque is None
+    assert d["hand"]["model"].endswith("aero_right.xml")
