@@ -209,7 +209,6 @@ impl Reader {
                 | "custom"
                 | "extension"
                 | "statistic"
-                | "option"
                 | "size"
                 | "geom"
                 | "inertial"
@@ -1279,6 +1278,13 @@ impl Robot {
                     };
                     if let Some(g) = v.fixed::<3>("gravity")? {
                         gravity = Vector3::from(g);
+                    }
+                    // `<flag gravity="disable"/>` turns it off.
+                    if e.children
+                        .iter()
+                        .any(|f| f.name == "flag" && f.attr("gravity") == Some("disable"))
+                    {
+                        gravity = Vector3::zeros();
                     }
                 }
                 "asset" | "visual" | "sensor" | "contact" | "keyframe" | "custom" | "extension"

@@ -669,6 +669,11 @@ fn masses_that_cannot_be_computed_fail_only_gravity() {
     let sideways =
         model(sphere, "").replace("<worldbody>", r#"<option gravity="0 0 9.81"/><worldbody>"#);
     assert_eq!(gravity(&sideways, down.clone()).unwrap(), vec![-t[0]]);
+    let off = model(sphere, "").replace(
+        "<worldbody>",
+        r#"<option gravity="0 0 9.81"><flag gravity="disable"/></option><worldbody>"#,
+    );
+    assert_eq!(gravity(&off, down.clone()).unwrap(), vec![0.0]);
     let floating =
         model(sphere, "").replace("<body name=\"palm\">", "<body name=\"palm\"><freejoint/>");
     let e = gravity(&floating, down).unwrap_err();
