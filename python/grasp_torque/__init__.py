@@ -163,14 +163,20 @@ def _limits(limits: Any) -> Any:
     return [None if isinstance(v, float) and v == math.inf else v for v in limits]
 
 
-def _gravity(gravity: Any) -> Any:
-    """``gravity`` for the hand form: ``None``, ``"model"`` or three real numbers."""
+def _gravity(gravity: Any, B: int):
+    """``gravity`` as the hand form's value and, when given per grasp (``[B, 3]``), the
+    rows: ``(None | "model" | [gx, gy, gz], None | ndarray[B, 3])``. Per grasp, the
+    hand form gets a zero vector, so that the masses are checked once for the batch."""
     if gravity is None or isinstance(gravity, str):
-        return gravity
+        return gravity, None
     g = _real("gravity", gravity)
-    if g.shape != (3,):
-        raise ValueError(f"gravity: expected [gx, gy, gz] or \"model\", got shape {g.shape}")
-    return g.tolist()
+    if g.shape == (3,):
+        return g.tolist(), None
+    if g.ndim == 2 and g.shape == (B, 3):
+        return [0.0, 0.0, 0.0], g
+    raise ValueError(
+        f"gravity: expected [gx, gy, gz], [B, 3] = ({B}, 3) or \"model\", got shape {g.shape}"
+    )
 
 
 def _contacts(contacts: Any) -> list:
@@ -682,7 +688,8 @@ class Hand:
         contacts' force components in their frames (``docs/geometry.md``), in the object
         frame about its origin; JT's rows are ``joint_names``."""
         q, P, N, pose = self._poses(joint_positions, positions, normals, object_pose)
-        spec_json = _dumps({"contacts": _contacts(contacts), "gravity": _gravity(gravity)})
+        g, rows = _gravity(gravity, q.shape[0])
+        spec_json = _dumps({"contacts": _contacts(contacts), "gravity": g})
         d = json.loads(self._native.describe(spec_json))
         B, n, m = q.shape[0], d["force_dim"], len(d["joint_names"])
         G = np.empty((B, 6, n))
@@ -690,7 +697,7 @@ class Hand:
         TP = np.empty((B, m))
         T = None if d["transmission"] is None else np.array(d["transmission"], dtype=np.float64)
         T3 = np.empty((B,) + T.shape) if d["transmission_varies"] else None
-        errors = self._native.arrays(q, P, N, pose, spec_json, G, JT, TP, T3)
+        errors = self._native.arrays(q, P, N, pose, rows, spec_json, G, JT, TP, T3)
         T = T if T3 is None else T3
         return HandArrays(G, JT, T, d["joint_names"], d["actuator_names"], dict(errors), TP)
 
@@ -735,8 +742,9 @@ class Hand:
         link (and those an actuator on them drives). ``names`` lists them, the last axis
         of ``torque``; an MJCF hand with actuators gives actuator forces.
         ``torque_limits="model"`` takes the file's limits. ``gravity`` (``[gx, gy,
-        gz]`` in the root frame, or ``"model"``: an MJCF file's ``<option gravity>``)
-        adds the links' weight to the springs' torques (default: weightless fingers). The solver keywords,
+        gz]`` in the root frame for every grasp, ``[B, 3]`` per grasp for a hand turned
+        differently in each, or ``"model"``: an MJCF file's ``<option gravity>``) adds
+        the links' weight to the springs' torques (default: weightless fingers). The solver keywords,
         ``threads``, ``warm_start`` and the preallocated outputs are ``solve_batch``'s.
         A grasp whose input is rejected (a NaN joint position, a normal that is not
         unit) is an ``invalid`` item with its message in ``errors``; only arguments that
@@ -748,7 +756,7 @@ class Hand:
         B, K = q.shape[0], W3.shape[1]
         spec = {
             "contacts": _contacts(contacts),
-            "gravity": _gravity(gravity),
+            "gravity": None,
             "torque_weights": torque_weights,
             "torque_limits": _limits(torque_limits),
             "min_normal_force": min_normal_force,
@@ -756,6 +764,7 @@ class Hand:
         settings = _settings(
             backend, cones, sides, latitudes, sfce_spacing, internal_forces, paper_model
         )
+        spec["gravity"], rows = _gravity(gravity, B)
         spec_json, settings_json = _dumps(spec), _dumps(settings)
         names, _ = self._native.layout(spec_json, settings_json)
         m = len(names)
@@ -767,6 +776,7 @@ class Hand:
             P,
             N,
             object_pose,
+            rows,
             spec_json,
             settings_json,
             threads,

@@ -989,7 +989,8 @@ impl Hand {
 
     /// The batch (as `solve_batch`): grasp b is the hand at `q[b]`
     /// (`joint_positions`), its contacts at `positions[b]` with `normals[b]` (a row of
-    /// NaN: the contact's own), the object at `poses[b]` (`[x, y, z, qw, qx, qy, qz]`).
+    /// NaN: the contact's own), the object at `poses[b]` (`[x, y, z, qw, qx, qy, qz]`),
+    /// under `gravity[b]` when given per grasp.
     #[allow(clippy::too_many_arguments)]
     fn solve_batch(
         &self,
@@ -999,6 +1000,7 @@ impl Hand {
         positions: Option<PyReadonlyArray3<'_, f64>>,
         normals: Option<PyReadonlyArray3<'_, f64>>,
         poses: Option<PyReadonlyArray2<'_, f64>>,
+        gravity: Option<PyReadonlyArray2<'_, f64>>,
         spec_json: &str,
         settings_json: &str,
         threads: usize,
@@ -1011,7 +1013,7 @@ impl Hand {
         let settings: Settings = from_keywords(settings_json)?;
         let (grasps, config) = self.grasps(from_keywords(spec_json)?, &settings)?;
         let wv = w.as_array();
-        let source = Posed::new(grasps, &q, Some(wv), &positions, &normals, &poses)?;
+        let source = Posed::new(grasps, &q, Some(wv), &positions, &normals, &poses, &gravity)?;
         let b = source.q.nrows();
         let k = wrench_count(&wv, b)?;
         if threads == 0 {
@@ -1062,6 +1064,7 @@ impl Hand {
         positions: Option<PyReadonlyArray3<'_, f64>>,
         normals: Option<PyReadonlyArray3<'_, f64>>,
         poses: Option<PyReadonlyArray2<'_, f64>>,
+        gravity: Option<PyReadonlyArray2<'_, f64>>,
         spec_json: &str,
         mut g: PyReadwriteArrayDyn<'_, f64>,
         mut jt: PyReadwriteArrayDyn<'_, f64>,
@@ -1069,7 +1072,7 @@ impl Hand {
         mut tr: Option<PyReadwriteArrayDyn<'_, f64>>,
     ) -> PyResult<Vec<(usize, String)>> {
         let (grasps, _) = self.grasps(from_keywords(spec_json)?, &Settings::default())?;
-        let source = Posed::new(grasps, &q, None, &positions, &normals, &poses)?;
+        let source = Posed::new(grasps, &q, None, &positions, &normals, &poses, &gravity)?;
         let b = source.q.nrows();
         let n = source
             .grasps
@@ -1216,6 +1219,8 @@ struct Posed<'a> {
     positions: Option<ArrayView3<'a, f64>>,
     normals: Option<ArrayView3<'a, f64>>,
     poses: Option<ArrayView2<'a, f64>>,
+    /// `[B, 3]`: each grasp's gravity in the root frame, if given per grasp.
+    gravity: Option<ArrayView2<'a, f64>>,
 }
 
 impl<'a> Posed<'a> {
@@ -1227,6 +1232,7 @@ impl<'a> Posed<'a> {
         positions: &'a Option<PyReadonlyArray3<'_, f64>>,
         normals: &'a Option<PyReadonlyArray3<'_, f64>>,
         poses: &'a Option<PyReadonlyArray2<'_, f64>>,
+        gravity: &'a Option<PyReadonlyArray2<'_, f64>>,
     ) -> PyResult<Self> {
         let q = q.as_array();
         let b = q.nrows();
@@ -1255,6 +1261,15 @@ impl<'a> Posed<'a> {
                 )));
             }
         }
+        let gravity = gravity.as_ref().map(|a| a.as_array());
+        if let Some(g) = &gravity {
+            if g.dim() != (b, 3) {
+                return Err(invalid(format!(
+                    "gravity: expected shape (3,) or ({b}, 3), [gx, gy, gz] in the root frame, got {:?}",
+                    g.shape()
+                )));
+            }
+        }
         Ok(Self {
             grasps,
             q,
@@ -1262,6 +1277,7 @@ impl<'a> Posed<'a> {
             positions,
             normals,
             poses,
+            gravity,
         })
     }
 }
@@ -1301,6 +1317,10 @@ impl BatchSource for Posed<'_> {
                 positions: positions.as_deref(),
                 normals: normals.as_deref(),
                 object_pose,
+                gravity: self
+                    .gravity
+                    .as_ref()
+                    .map(|g| [g[(b, 0)], g[(b, 1)], g[(b, 2)]]),
             })
             .map_err(Error::from)?;
         // Each wrench is checked when it is solved: a bad first wrench fails only itself.

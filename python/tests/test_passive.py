@@ -150,3 +150,35 @@ def test_a_hand_form_problem_shows_its_passive_torques():
     np.testing.assert_allclose(p.jacobian_transpose @ f, T @ r.torque + p.passive_torque, rtol=0, atol=1e-12)
     assert gt.Problem.load(ROOT / "fixtures/hand3-pcwf.json").passive_torque is None
     assert d["hand"]["model"].endswith("aero_right.xml")
+
+
+def test_gravity_per_grasp_is_each_grasps_hand_form():
+    hand = gt.Hand(ROOT / "fixtures/urdf/allegro/allegro_hand_right.urdf")
+    pinch = json.loads((ROOT / "fixtures/hands/allegro-pinch.json").read_text())
+    q = np.array([pinch["hand"]["joint_positions"].get(n, 0.0) for n in hand.joint_names])
+    rng = np.random.default_rng(4)
+    B = 12
+    Q = q + rng.normal(0, 0.02, (B, q.size))
+    # The hand turned a different way for each grasp: gravity in its root frame.
+    g = rng.normal(size=(B, 3))
+    g *= 9.81 / np.linalg.norm(g, axis=1, keepdims=True)
+    pose = pinch["object_pose"]["position"] + pinch["object_pose"]["quaternion"]
+    W = np.tile(pinch["wrench"], (B, 1))
+    out = hand.solve_batch(Q, W, pinch["contacts"], object_pose=pose, gravity=g, torque_limits="model")
+    a = hand.arrays(Q, pinch["contacts"], object_pose=pose, gravity=g)
+    for b in range(B):
+        d = json.loads(json.dumps(pinch))
+        d["hand"]["model"] = str(ROOT / "fixtures/urdf/allegro/allegro_hand_right.urdf")
+        d["hand"]["joint_positions"] = dict(zip(hand.joint_names, Q[b].tolist()))
+        d["hand"]["gravity"] = g[b].tolist()
+        p = gt.Problem.from_dict(d)
+        np.testing.assert_array_equal(a.passive_torque[b], p.passive_torque)
+        r = gt.Solver(p).solve()
+        assert gt.STATUS_CODES[out.status[b]] == r.status
+        np.testing.assert_array_equal(out.torque[b], r.torque)
+    # One bad row is that grasp's error; a wrong shape is the batch's.
+    g[3, 1] = np.inf
+    bad = hand.solve_batch(Q, W, pinch["contacts"], object_pose=pose, gravity=g)
+    assert set(bad.errors) == {3} and "gravity" in bad.errors[3]
+    with pytest.raises(ValueError, match=r"gravity: expected .*\(12, 3\)"):
+        hand.solve_batch(Q, W, pinch["contacts"], gravity=g[:5])

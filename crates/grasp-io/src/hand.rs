@@ -630,20 +630,21 @@ impl HandFile {
             }
         }
         let gravity = self.hand.gravity(robot)?;
-        if gravity.is_some() {
-            // The links a problem's joint carries are posed for their weight; the
-            // others load only joints outside the problem.
-            for l in 0..robot.links.len() {
-                let loads = robot.chain(l).iter().any(|&j| {
-                    robot.coupling[j].is_some_and(|c| row_of[c.independent] != usize::MAX)
-                });
-                if loads {
-                    robot.mark_ancestors(l, &mut needed);
-                }
+        // The links a problem's joint carries are posed for their weight; the others
+        // load only joints outside the problem.
+        let mut weighed = needed.clone();
+        for l in 0..robot.links.len() {
+            let loads = robot
+                .chain(l)
+                .iter()
+                .any(|&j| robot.coupling[j].is_some_and(|c| row_of[c.independent] != usize::MAX));
+            if loads {
+                robot.mark_ancestors(l, &mut weighed);
             }
         }
         let mut grasps = HandGrasps {
             gravity,
+            weighed,
             robot,
             contacts,
             needed,
@@ -790,6 +791,9 @@ pub struct GraspPose<'a> {
     pub normals: Option<&'a [Option<[f64; 3]>]>,
     /// The object frame in the root link's frame; `None`: the file's.
     pub object_pose: Option<ObjectPose>,
+    /// The acceleration of gravity in the root frame for this grasp (a planner's hand
+    /// turned another way); `None`: the file's `hand.gravity`.
+    pub gravity: Option<[f64; 3]>,
 }
 
 /// The grasps of one hand file's contacts on a robot, ready to pose: what a planner
@@ -823,6 +827,9 @@ pub struct HandGrasps<'r> {
     tendon_columns: Vec<(usize, usize, f64)>,
     /// Gravity on the fingers, in the root frame.
     gravity: Option<Vector3<f64>>,
+    /// `needed` and the links the problem's joints carry: what a pose with gravity
+    /// places.
+    weighed: Vec<bool>,
 }
 
 impl HandGrasps<'_> {
@@ -854,8 +861,9 @@ impl HandGrasps<'_> {
         &self,
         q_ind: &[f64],
         frames: &Pose,
+        gravity: Option<Vector3<f64>>,
     ) -> Result<Option<Vec<f64>>, ProblemError> {
-        if self.robot.springs.is_empty() && self.gravity.is_none() {
+        if self.robot.springs.is_empty() && gravity.is_none() {
             return Ok(None);
         }
         let full = self.robot.full_positions(q_ind);
@@ -863,7 +871,7 @@ impl HandGrasps<'_> {
             .robot
             .passive_torques(&full, frames)
             .map_err(|w| inside_wrap(&w))?;
-        if let Some(g) = &self.gravity {
+        if let Some(g) = &gravity {
             let weight = self
                 .robot
                 .gravity_torques(frames, g)
@@ -883,7 +891,7 @@ impl HandGrasps<'_> {
         for (r, v) in out.iter_mut().enumerate() {
             *v = flush_subnormal(*v);
             if !v.is_finite() || v.abs() > MAX_MAGNITUDE {
-                let (field, what) = match self.gravity {
+                let (field, what) = match gravity {
                     Some(_) => ("hand.gravity", "springs' and links' weight"),
                     None => ("hand.model", "springs'"),
                 };
@@ -989,7 +997,27 @@ impl HandGrasps<'_> {
             UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
         );
         let to_object = object.inverse();
-        let frames = robot.pose_of(q_ind, &self.needed);
+        let gravity = match pose.gravity {
+            Some(g) => {
+                if let Some(x) = g.iter().find(|x| !x.is_finite() || x.abs() > MAX_MAGNITUDE) {
+                    return Err(ProblemError::invalid(
+                        "gravity",
+                        "[gx, gy, gz] in the root frame, finite, of magnitude at most 1e12",
+                        x,
+                    ));
+                }
+                Some(Vector3::from(g))
+            }
+            None => self.gravity,
+        };
+        let frames = robot.pose_of(
+            q_ind,
+            if gravity.is_some() {
+                &self.weighed
+            } else {
+                &self.needed
+            },
+        );
 
         // Contacts in the object frame.
         let mut placed = Vec::with_capacity(n);
@@ -1108,7 +1136,7 @@ impl HandGrasps<'_> {
         }
         let mut problem = self.template.clone();
         self.tendon_arms(&frames, &mut problem)?;
-        problem.passive_torque = self.passive_torque(q_ind, &frames)?;
+        problem.passive_torque = self.passive_torque(q_ind, &frames, gravity)?;
         problem.grasp_matrix = g;
         problem.jacobian_transpose = jt;
         problem.validate()?;

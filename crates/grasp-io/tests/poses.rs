@@ -1,7 +1,8 @@
 //! `HandGrasps::pose` (a planner's batch: the contacts fixed, the configuration, contact
 //! points, normals and object pose per grasp) against `HandFile::build` of the same
-//! grasp written as a hand file, on a URDF hand with link contacts and an MJCF hand with
-//! site contacts and actuators.
+//! grasp written as a hand file, on a URDF hand with link contacts, an MJCF hand with
+//! site contacts and actuators, and a tendon hand with springs; a third of the grasps
+//! under their own gravity.
 
 use grasp_core::error::ProblemError;
 use grasp_io::hand::{ContactFrame, GraspPose, HandFile, ObjectPose};
@@ -87,6 +88,11 @@ fn same_both_ways(fixture: &str, points: bool, seed: u64, cases: usize) {
             quaternion,
         };
         file.object_pose = Some(object_pose);
+        // Every third grasp under its own gravity (the hand turned another way).
+        let gravity = (case % 3 == 0).then(|| rng.unit().map(|x| 9.81 * x));
+        if let Some(g) = gravity {
+            file.hand.gravity = Some(serde_json::json!(g));
+        }
         let built = file.build(&robot).unwrap().problem;
         // The frames travel with the template's contacts: pose with a template whose
         // frames are this grasp's.
@@ -101,6 +107,7 @@ fn same_both_ways(fixture: &str, points: bool, seed: u64, cases: usize) {
                 positions: points.then_some(&positions[..]),
                 normals: Some(&normals),
                 object_pose: Some(object_pose),
+                gravity,
             })
             .unwrap();
         assert_eq!(
@@ -129,6 +136,11 @@ fn posing_a_urdf_hand_is_building_its_file() {
 #[test]
 fn posing_an_mjcf_hand_with_sites_and_actuators_is_building_its_file() {
     same_both_ways("fixtures/hands/shadow-tripod.json", false, 29, 200);
+}
+
+#[test]
+fn posing_a_tendon_hand_with_springs_is_building_its_file() {
+    same_both_ways("fixtures/hands/aero-pinch.json", false, 31, 100);
 }
 
 fn field_of(e: ProblemError) -> (String, String) {
