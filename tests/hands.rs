@@ -168,6 +168,7 @@ fn the_fingers_weight_enters_as_passive_torques() {
     // Jᵀ f = τ + τ_p, with τ_p the matrix form's passive_torque.
     let built: serde_json::Value = serde_json::from_slice(&run(&["build", p]).stdout).unwrap();
     let tp: Vec<f64> = serde_json::from_value(built["passive_torque"].clone()).unwrap();
+    assert_eq!(solved["passive_torque"], built["passive_torque"]);
     let jt: Vec<Vec<f64>> = serde_json::from_value(built["jacobian_transpose"].clone()).unwrap();
     let f: Vec<Vec<f64>> = serde_json::from_value(solved["contact_forces"].clone()).unwrap();
     let f: Vec<f64> = f.concat();

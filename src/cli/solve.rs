@@ -149,6 +149,10 @@ pub(crate) fn to_json(
             o.insert("joint_names".into(), json!(names));
         }
     }
+    // τ_p per joint (`joint_names`): Jᵀ f = τ + τ_p.
+    if !model.passive.joint_torque.is_empty() {
+        o.insert("passive_torque".into(), json!(model.passive.joint_torque));
+    }
     o.insert(
         "contact_models".into(),
         json!(qp
