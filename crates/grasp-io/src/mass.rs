@@ -3,7 +3,7 @@
 //! Pinocchio's `−computeGeneralizedGravity`), which enter the grasp as passive torques
 //! (`Jᵀ f = T u + τ_p`).
 
-use crate::urdf::{Pose, Robot};
+use crate::urdf::{JointKind, Pose, Robot};
 use nalgebra::Vector3;
 
 /// What a link weighs.
@@ -47,7 +47,7 @@ impl Robot {
                     let moves = self
                         .chain(l)
                         .iter()
-                        .any(|&j| self.joints[j].kind != crate::urdf::JointKind::Fixed);
+                        .any(|&j| self.joints[j].kind != JointKind::Fixed);
                     if moves {
                         return Err(format!("link `{}`: {why}", self.links[l]));
                     }
@@ -69,7 +69,7 @@ impl Robot {
                 let frame = pose.joints[j];
                 let axis = frame.rotation * joint.axis.into_inner();
                 match joint.kind {
-                    crate::urdf::JointKind::Fixed => 0.0,
+                    JointKind::Fixed => 0.0,
                     k if k.rotates() => {
                         g.dot(&axis.cross(&(moment[c] - carried[c] * frame.translation.vector)))
                     }

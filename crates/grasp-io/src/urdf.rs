@@ -9,8 +9,8 @@
 //! `<collision>`, `<calibration>`, `<dynamics>`, `<safety_controller>` and every
 //! top-level element other than `<link>` and `<joint>`.
 //! Malformed or duplicated inertial data therefore loads, with a warning (the link's
-//! weight is then unknown), and meshes are never opened. Everything the kinematics uses is checked: every error names the file,
-//! the element and the problem.
+//! weight is then unknown), and meshes are never opened. Everything the kinematics
+//! uses is checked: every error names the file, the element and the problem.
 //!
 //! Frames follow the URDF specification: a joint's frame is its parent link's frame
 //! moved by `<origin xyz rpy>` (roll, pitch, yaw about the fixed x, y, z axes, so
@@ -148,7 +148,7 @@ pub struct Robot {
     /// Per link: its mass and centre of mass (URDF `<inertial>`; MJCF `<inertial>` or
     /// its geoms, as MuJoCo's compiler computes them), for
     /// [`Robot::gravity_torques`].
-    pub masses: Vec<crate::mass::LinkMass>,
+    pub masses: Vec<LinkMass>,
     /// The acceleration of gravity in the root frame the file gives (MJCF `<option
     /// gravity>`, default `0 0 −9.81`): `None` for a URDF, which has none, and for a
     /// floating MJCF hand, whose orientation in the world the file does not fix.
