@@ -6,8 +6,10 @@ the reader claims to read: joint origins with `xyz` and `rpy`, axes that are not
 length, revolute, continuous, prismatic and fixed joints (chains of fixed joints
 included), mimic joints (chains of them, negative multipliers, offsets), limits with
 a positive effort and with 0 (no limit), `<inertial>` masses off the link frames (on
-most links), and `<joint>` elements listed in any order (before their links, shuffled). Pinocchio must load it; `oracle_urdf.py` then writes its Jᵀ, G and
-effort limits.
+most links), and `<joint>` elements listed in any order (before their links, shuffled).
+From the seventh model on, the files are URDF 1.1 and about half of the joint origins
+are turned by `quat_xyzw`, not normalised. Pinocchio must load it; `oracle_urdf.py`
+then writes its Jᵀ, G and effort limits.
 
 Run from the repository root (pin 4.1.0 and numpy from PyPI; see oracle_urdf.py):
 
@@ -22,7 +24,9 @@ import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "fixtures", "urdf", "random")
-MODELS = int(os.environ.get("RANDOM_MODELS", 6))
+MODELS = int(os.environ.get("RANDOM_MODELS", 8))
+# Models from this index on are URDF 1.1 with `quat_xyzw` origins.
+QUATERNIONS_FROM = 6
 
 
 def fmt(v):
@@ -40,7 +44,7 @@ def link(name, rng):
             '</inertial></link>')
 
 
-def hand(rng, mrng):
+def hand(rng, mrng, qrng=None):
     links = ["palm"]
     joints = []  # (xml, name, kind)
     movable = []  # (name, finger)
@@ -54,6 +58,10 @@ def hand(rng, mrng):
             name = f"f{f}_j{d}"
             origin = (f'<origin xyz="{fmt(rng.uniform(-0.04, 0.04, 3))}" '
                       f'rpy="{fmt(rng.uniform(-np.pi, np.pi, 3))}"/>')
+            if qrng is not None and qrng.random() < 0.5:
+                # A quaternion of any length: URDF 1.1 readers normalise it.
+                quat = qrng.normal(size=4) * qrng.uniform(0.5, 2.0)
+                origin = origin.split(" rpy=")[0] + f' quat_xyzw="{fmt(quat)}"/>'
             xml = [f'<joint name="{name}" type="{kind}">', f'<parent link="{parent}"/>',
                    f'<child link="{child}"/>', origin]
             if kind != "fixed":
@@ -80,7 +88,7 @@ def hand(rng, mrng):
         for k in range(1, len(names)):
             if rng.random() < 0.35:
                 mimic[names[k]] = (names[k - 1], rng.uniform(-1.5, 1.5), rng.uniform(-0.2, 0.2))
-    out = ['<robot name="random">']
+    out = ['<robot name="random">' if qrng is None else '<robot name="random" version="1.1">']
     order = list(range(len(joints)))
     if rng.random() < 0.5:
         rng.shuffle(order)
@@ -107,7 +115,8 @@ def main():
         seed += 1
         rng = np.random.default_rng(2000 + seed)
         # Masses from their own stream: the kinematics stay as drawn.
-        text, tips = hand(rng, np.random.default_rng(9000 + seed))
+        qrng = np.random.default_rng(7000 + seed) if written >= QUATERNIONS_FROM else None
+        text, tips = hand(rng, np.random.default_rng(9000 + seed), qrng)
         path = os.path.join(OUT, f"random-{written}.urdf")
         with open(path, "w") as f:
             f.write('<?xml version="1.0"?>\n'

@@ -1,16 +1,14 @@
 //! Robot descriptions in URDF: the kinematic tree of a hand, its independent joints and
 //! mimic couplings, forward kinematics and joint frames.
 //!
-//! Parsing is [`urdf_rs`]'s, after a pass with `roxmltree` that records where each
-//! element is (for messages), checks every number of `<origin>`, `<axis>`, `<limit>`
-//! and `<mimic>`, reads `<limit>` and each `<inertial>`'s mass and centre of mass
-//! itself (urdf-rs requires `effort` and `velocity`, statics neither, and the weight
-//! only when gravity is asked for), and drops what statics never reads: `<visual>`,
-//! `<collision>`, `<calibration>`, `<dynamics>`, `<safety_controller>` and every
-//! top-level element other than `<link>` and `<joint>`.
-//! Malformed or duplicated inertial data therefore loads, with a warning (the link's
-//! weight is then unknown), and meshes are never opened. Everything the kinematics
-//! uses is checked: every error names the file, the element and the problem.
+//! The file is read with `roxmltree`, which gives every element's line for messages.
+//! Only what statics uses is read: links, and each joint's type, `<origin>`, `<axis>`,
+//! `<parent>`, `<child>`, `<limit>` (with neither `effort` nor `velocity` required)
+//! and `<mimic>`, each at most once and every number checked; and each `<inertial>`'s
+//! mass and centre of mass. Malformed or duplicated inertial data loads, with a
+//! warning (the link's weight is then unknown, an error only when gravity is asked
+//! for); `<visual>`, `<collision>`, `<transmission>`, `<gazebo>` and the rest are
+//! never read, so meshes are never opened.
 //!
 //! Frames follow the URDF specification: a joint's frame is its parent link's frame
 //! moved by `<origin xyz rpy>` (roll, pitch, yaw about the fixed x, y, z axes, so
@@ -22,7 +20,7 @@
 use crate::mass::LinkMass;
 use crate::tendon::SpatialTendon;
 use grasp_core::error::ProblemError;
-use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -272,12 +270,8 @@ pub fn nearest<'a>(name: &str, names: impl IntoIterator<Item = &'a str>) -> Stri
     }
 }
 
-/// Elements statics never reads: dropped before `urdf_rs` sees the text.
-const IGNORED_IN_LINK: [&str; 3] = ["inertial", "visual", "collision"];
-const IGNORED_IN_JOINT: [&str; 3] = ["calibration", "dynamics", "safety_controller"];
-
-/// A joint's `<limit>`, read here rather than by urdf-rs, which requires `effort` and
-/// `velocity` (statics needs neither).
+/// A joint's `<limit>`; statics needs neither `effort` nor `velocity`, which the URDF
+/// specification requires.
 #[derive(Clone, Copy, Debug, Default)]
 struct Limit {
     lower: Option<f64>,
@@ -294,12 +288,38 @@ const JOINT_TYPES: [&str; 7] = [
     "spherical",
 ];
 
-/// What the `roxmltree` pass learns: element lines, warnings, and the text to parse.
+/// The children of `<joint>` statics reads; each may appear once.
+const JOINT_PARTS: [&str; 6] = ["origin", "axis", "parent", "child", "limit", "mimic"];
+
+/// `<mimic>` as written: the leader by name.
+struct RawMimic {
+    joint: String,
+    multiplier: f64,
+    offset: f64,
+}
+
+/// A `<joint>` as written, its numbers checked; links and the leader by name.
+struct RawJoint {
+    name: String,
+    kind: &'static str,
+    origin: Isometry3<f64>,
+    /// `<axis xyz>` (default `1 0 0`), not yet normalised.
+    axis: Vector3<f64>,
+    parent: String,
+    child: String,
+    limit: Limit,
+    mimic: Option<RawMimic>,
+    line: u32,
+}
+
+/// What the `roxmltree` pass reads: the links and joints with their lines, and
+/// warnings.
 struct Scan {
-    text: String,
-    link_lines: HashMap<String, u32>,
-    joint_lines: HashMap<String, u32>,
-    limits: HashMap<String, Limit>,
+    /// `<robot name>` ("" if none).
+    name: String,
+    links: Vec<String>,
+    link_lines: Vec<u32>,
+    joints: Vec<RawJoint>,
     warnings: Vec<String>,
     /// Per link with an `<inertial>`: its mass.
     masses: HashMap<String, LinkMass>,
@@ -333,6 +353,168 @@ fn numbers<const N: usize>(
     }
 }
 
+/// `<robot version="major.minor">`; absent or malformed is 1.0, as urdfdom reads it.
+fn version(robot: roxmltree::Node) -> (u32, u32) {
+    robot
+        .attribute("version")
+        .and_then(|v| {
+            let (major, minor) = v.trim().split_once('.')?;
+            Some((major.parse().ok()?, minor.parse().ok()?))
+        })
+        .unwrap_or((1, 0))
+}
+
+/// A joint's `<origin>`: `xyz`, and `rpy` (roll, pitch, yaw about the fixed axes) or,
+/// from URDF 1.1 on, `quat_xyzw` (normalised, as urdfdom does); an older file's
+/// `quat_xyzw` is ignored, as urdfdom ignores it.
+fn origin(
+    file: &str,
+    at: &str,
+    e: roxmltree::Node,
+    version: (u32, u32),
+) -> Result<Isometry3<f64>, ProblemError> {
+    let xyz = numbers::<3>(file, at, e, "xyz")?.unwrap_or_default();
+    let rpy = numbers::<3>(file, at, e, "rpy")?;
+    let quat = if version >= (1, 1) {
+        numbers::<4>(file, at, e, "quat_xyzw")?
+    } else {
+        None
+    };
+    let rotation = match (rpy, quat) {
+        (Some(_), Some(_)) => {
+            return Err(robot_error(
+                file,
+                at,
+                "<origin> has both rpy and quat_xyzw: give one",
+            ))
+        }
+        (_, Some([x, y, z, w])) => {
+            // Scaled first, so that no finite quaternion overflows its norm.
+            let big = [x, y, z, w].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if big == 0.0 {
+                return Err(robot_error(
+                    file,
+                    at,
+                    "<origin quat_xyzw=\"0 0 0 0\">: expected a nonzero quaternion",
+                ));
+            }
+            UnitQuaternion::from_quaternion(Quaternion::new(w / big, x / big, y / big, z / big))
+        }
+        (rpy, None) => {
+            let [r, p, y] = rpy.unwrap_or_default();
+            UnitQuaternion::from_euler_angles(r, p, y)
+        }
+    };
+    Ok(Isometry3::from_parts(
+        Translation3::from(Vector3::from(xyz)),
+        rotation,
+    ))
+}
+
+/// A `<joint>`'s parts, each checked; `at` names it in errors.
+fn joint(
+    file: &str,
+    at: &str,
+    e: roxmltree::Node,
+    version: (u32, u32),
+    line: impl Fn(roxmltree::Node) -> u32,
+) -> Result<RawJoint, ProblemError> {
+    let kind = e.attribute("type").unwrap_or("");
+    let Some(kind) = JOINT_TYPES.iter().find(|&&t| t == kind) else {
+        return Err(robot_error(
+            file,
+            at,
+            format!(
+                "unknown joint type `{kind}` (expected one of {})",
+                JOINT_TYPES.join(", ")
+            ),
+        ));
+    };
+    let mut parts: [Option<roxmltree::Node>; JOINT_PARTS.len()] = [None; JOINT_PARTS.len()];
+    for c in e.children().filter(|n| n.is_element()) {
+        let tag = c.tag_name().name();
+        if let Some(k) = JOINT_PARTS.iter().position(|&p| p == tag) {
+            if let Some(first) = parts[k] {
+                return Err(robot_error(
+                    file,
+                    at,
+                    format!(
+                        "a second <{tag}> (line {}; the first is on line {})",
+                        line(c),
+                        line(first)
+                    ),
+                ));
+            }
+            parts[k] = Some(c);
+        }
+    }
+    let [origin_e, axis_e, parent_e, child_e, limit_e, mimic_e] = parts;
+    let link_of = |part: &str, e: Option<roxmltree::Node>| {
+        e.and_then(|c| c.attribute("link"))
+            .map(str::to_string)
+            .ok_or_else(|| robot_error(file, at, format!("no <{part} link=\"…\"/> element")))
+    };
+    let parent = link_of("parent", parent_e)?;
+    let child = link_of("child", child_e)?;
+    let origin = match origin_e {
+        Some(c) => origin(file, at, c, version)?,
+        None => Isometry3::identity(),
+    };
+    let axis = match axis_e {
+        Some(c) => numbers::<3>(file, at, c, "xyz")?,
+        None => None,
+    }
+    .map_or_else(Vector3::x, Vector3::from);
+    let mut limit = Limit::default();
+    if let Some(c) = limit_e {
+        let one = |a| numbers::<1>(file, at, c, a).map(|v| v.map(|[x]| x));
+        limit = Limit {
+            lower: one("lower")?,
+            upper: one("upper")?,
+            effort: one("effort")?,
+        };
+        one("velocity")?;
+        if limit.effort.is_some_and(|e| e < 0.0) {
+            return Err(robot_error(
+                file,
+                at,
+                format!(
+                    "<limit effort=\"{}\"> is negative",
+                    c.attribute("effort").unwrap_or("")
+                ),
+            ));
+        }
+    }
+    let mimic = match mimic_e {
+        None => None,
+        Some(c) => {
+            let leader = c.attribute("joint").ok_or_else(|| {
+                robot_error(
+                    file,
+                    at,
+                    "<mimic> has no joint attribute (the joint it follows)",
+                )
+            })?;
+            Some(RawMimic {
+                joint: leader.to_string(),
+                multiplier: numbers::<1>(file, at, c, "multiplier")?.map_or(1.0, |[m]| m),
+                offset: numbers::<1>(file, at, c, "offset")?.map_or(0.0, |[o]| o),
+            })
+        }
+    };
+    Ok(RawJoint {
+        name: String::new(),
+        kind,
+        origin,
+        axis,
+        parent,
+        child,
+        limit,
+        mimic,
+        line: line(e),
+    })
+}
+
 fn scan(text: &str, file: &str) -> Result<Scan, ProblemError> {
     let doc = roxmltree::Document::parse(text)
         .map_err(|e| robot_error(file, "(document)", format!("not well-formed XML: {e}")))?;
@@ -346,7 +528,7 @@ fn scan(text: &str, file: &str) -> Result<Scan, ProblemError> {
             "expected a <robot> element at the top level (a URDF)",
         ));
     }
-    // The URDF reader recurses per level; no robot description nests this deep.
+    // A URDF nests five or six levels; the same bound as an MJCF file's.
     let mut stack = vec![(robot, 1usize)];
     while let Some((node, depth)) = stack.pop() {
         if depth > MAX_DEPTH {
@@ -362,20 +544,19 @@ fn scan(text: &str, file: &str) -> Result<Scan, ProblemError> {
                 .map(|n| (n, depth + 1)),
         );
     }
-    let mut cut: Vec<std::ops::Range<usize>> = Vec::new();
-    let mut link_lines = HashMap::new();
-    let mut joint_lines = HashMap::new();
-    let mut limits = HashMap::new();
+    let version = version(robot);
+    let mut links = Vec::new();
+    let mut link_lines = Vec::new();
+    let mut joints = Vec::new();
+    let mut first_line: [HashMap<&str, u32>; 2] = [HashMap::new(), HashMap::new()];
     let mut warnings = Vec::new();
     let mut masses = HashMap::new();
-    let mut links = 0usize;
-    for e in robot.children().filter(|n| n.is_element()) {
+    // <material>, <transmission>, <gazebo>, …: nothing statics reads.
+    for e in robot
+        .children()
+        .filter(|n| n.has_tag_name("link") || n.has_tag_name("joint"))
+    {
         let tag = e.tag_name().name();
-        if tag != "link" && tag != "joint" {
-            // <material>, <transmission>, <gazebo>, …: nothing statics reads.
-            cut.push(e.range());
-            continue;
-        }
         let Some(name) = e.attribute("name") else {
             return Err(robot_error(
                 file,
@@ -384,59 +565,52 @@ fn scan(text: &str, file: &str) -> Result<Scan, ProblemError> {
             ));
         };
         let at = format!("<{tag} name=\"{name}\"> (line {})", line(e));
-        let lines = if tag == "link" {
-            links += 1;
-            if links > MAX_LINKS {
-                return Err(robot_error(
-                    file,
-                    at,
-                    format!("more than {MAX_LINKS} links; a hand has far fewer"),
-                ));
-            }
-            &mut link_lines
-        } else {
-            &mut joint_lines
-        };
-        if let Some(first) = lines.insert(name.to_string(), line(e)) {
+        if let Some(first) = first_line[usize::from(tag == "joint")].insert(name, line(e)) {
             return Err(robot_error(
                 file,
                 at,
                 format!("a second {tag} of this name (the first is on line {first})"),
             ));
         }
-        let ignored: &[&str] = if tag == "link" {
-            &IGNORED_IN_LINK
-        } else {
-            &IGNORED_IN_JOINT
-        };
+        if tag == "joint" {
+            let mut j = joint(file, &at, e, version, line)?;
+            j.name = name.to_string();
+            joints.push(j);
+            continue;
+        }
+        if links.len() == MAX_LINKS {
+            return Err(robot_error(
+                file,
+                at,
+                format!("more than {MAX_LINKS} links; a hand has far fewer"),
+            ));
+        }
+        links.push(name.to_string());
+        link_lines.push(line(e));
+        // Only the mass and its centre: <visual> and <collision> are never read, so
+        // meshes are never opened.
         let mut inertials = 0;
-        for c in e.children().filter(|n| n.is_element()) {
-            let ctag = c.tag_name().name();
-            if ignored.contains(&ctag) {
-                cut.push(c.range());
+        for c in e.children().filter(|c| c.has_tag_name("inertial")) {
+            inertials += 1;
+            let mass = inertial_mass(c)
+                .map_err(|bad| format!("<inertial> on line {} is malformed ({bad})", line(c)));
+            if let Err(why) = &mass {
+                warnings.push(format!(
+                    "{file}: {at}: {why}: the link's weight is unknown (an error only if gravity is asked for)"
+                ));
+            } else if let Some(bad) = malformed_tensor(c) {
+                warnings.push(format!(
+                    "{file}: {at}: <inertial> on line {} has a malformed {bad}; ignored, since rotational inertia does not enter statics",
+                    line(c)
+                ));
             }
-            if ctag == "inertial" {
-                inertials += 1;
-                let mass = inertial_mass(c)
-                    .map_err(|bad| format!("<inertial> on line {} is malformed ({bad})", line(c)));
-                if let Err(why) = &mass {
-                    warnings.push(format!(
-                        "{file}: {at}: {why}: the link's weight is unknown (an error only if gravity is asked for)"
-                    ));
-                } else if let Some(bad) = malformed_tensor(c) {
-                    warnings.push(format!(
-                        "{file}: {at}: <inertial> on line {} has a malformed {bad}; ignored, since rotational inertia does not enter statics",
-                        line(c)
-                    ));
-                }
-                masses.insert(
-                    name.to_string(),
-                    mass.map_or_else(LinkMass::Unknown, |(mass, com)| LinkMass::Known {
-                        mass,
-                        com,
-                    }),
-                );
-            }
+            masses.insert(
+                name.to_string(),
+                mass.map_or_else(LinkMass::Unknown, |(mass, com)| LinkMass::Known {
+                    mass,
+                    com,
+                }),
+            );
         }
         if inertials > 1 {
             warnings.push(format!(
@@ -447,85 +621,12 @@ fn scan(text: &str, file: &str) -> Result<Scan, ProblemError> {
                 LinkMass::Unknown(format!("{inertials} <inertial> elements")),
             );
         }
-        if tag == "joint" {
-            for c in e.children().filter(|n| n.is_element()) {
-                match c.tag_name().name() {
-                    "origin" => {
-                        numbers::<3>(file, &at, c, "xyz")?;
-                        numbers::<3>(file, &at, c, "rpy")?;
-                    }
-                    "axis" => {
-                        numbers::<3>(file, &at, c, "xyz")?;
-                    }
-                    "mimic" => {
-                        numbers::<1>(file, &at, c, "multiplier")?;
-                        numbers::<1>(file, &at, c, "offset")?;
-                    }
-                    "limit" => {
-                        let one = |a| numbers::<1>(file, &at, c, a).map(|v| v.map(|[x]| x));
-                        let limit = Limit {
-                            lower: one("lower")?,
-                            upper: one("upper")?,
-                            effort: one("effort")?,
-                        };
-                        one("velocity")?;
-                        if limit.effort.is_some_and(|e| e < 0.0) {
-                            return Err(robot_error(
-                                file,
-                                &at,
-                                format!(
-                                    "<limit effort=\"{}\"> is negative",
-                                    c.attribute("effort").unwrap_or("")
-                                ),
-                            ));
-                        }
-                        limits.insert(name.to_string(), limit);
-                        cut.push(c.range());
-                    }
-                    _ => {}
-                }
-            }
-            let kind = e.attribute("type").unwrap_or("");
-            if !JOINT_TYPES.contains(&kind) {
-                return Err(robot_error(
-                    file,
-                    at,
-                    format!(
-                        "unknown joint type `{kind}` (expected one of {})",
-                        JOINT_TYPES.join(", ")
-                    ),
-                ));
-            }
-            for part in ["parent", "child"] {
-                let link = e
-                    .children()
-                    .find(|c| c.has_tag_name(part))
-                    .and_then(|c| c.attribute("link"));
-                if link.is_none() {
-                    return Err(robot_error(
-                        file,
-                        at,
-                        format!("no <{part} link=\"…\"/> element"),
-                    ));
-                }
-            }
-        }
     }
-    cut.sort_by_key(|r| r.start);
-    let mut kept = String::with_capacity(text.len());
-    let mut at = 0;
-    for r in cut {
-        if r.start >= at {
-            kept.push_str(&text[at..r.start]);
-            at = r.end;
-        }
-    }
-    kept.push_str(&text[at..]);
     Ok(Scan {
-        text: kept,
+        name: robot.attribute("name").unwrap_or("").to_string(),
+        links,
         link_lines,
-        joint_lines,
-        limits,
+        joints,
         warnings,
         masses,
     })
@@ -596,16 +697,26 @@ impl Robot {
     pub fn parse(text: &str, source: &str) -> Result<Self, ProblemError> {
         let file = source;
         let scan = scan(text, file)?;
-        let parsed = urdf_rs::read_from_string(&scan.text)
-            .map_err(|e| robot_error(file, "<robot>", format!("could not be read: {e}")))?;
-        let link_line = |name: &str| scan.link_lines.get(name).copied().unwrap_or(0);
+        let Scan {
+            name,
+            links,
+            link_lines,
+            joints: raw,
+            warnings,
+            masses,
+        } = scan;
+        let mut warnings = warnings;
+        let joint_index: HashMap<&str, usize> = raw
+            .iter()
+            .enumerate()
+            .map(|(i, j)| (j.name.as_str(), i))
+            .collect();
         let joint_at = |name: &str| {
             format!(
                 "<joint name=\"{name}\"> (line {})",
-                scan.joint_lines.get(name).copied().unwrap_or(0)
+                joint_index.get(name).map_or(0, |&j| raw[j].line)
             )
         };
-        let links: Vec<String> = parsed.links.iter().map(|l| l.name.clone()).collect();
         let link_index: HashMap<&str, usize> = links
             .iter()
             .enumerate()
@@ -614,11 +725,10 @@ impl Robot {
         if links.is_empty() {
             return Err(robot_error(file, "<robot>", "has no <link>"));
         }
-        let mut warnings = scan.warnings;
-        let mut joints = Vec::with_capacity(parsed.joints.len());
+        let mut joints = Vec::with_capacity(raw.len());
         let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
-        let mut base_mounts: Vec<(usize, String)> = Vec::new();
-        for (ji, j) in parsed.joints.iter().enumerate() {
+        let mut base_mounts: Vec<(usize, &str)> = Vec::new();
+        for (ji, j) in raw.iter().enumerate() {
             let at = joint_at(&j.name);
             let find = |role: &str, name: &str| {
                 link_index.get(name).copied().ok_or_else(|| {
@@ -632,8 +742,8 @@ impl Robot {
                     )
                 })
             };
-            let parent = find("parent", &j.parent.link)?;
-            let child = find("child", &j.child.link)?;
+            let parent = find("parent", &j.parent)?;
+            let child = find("child", &j.child)?;
             if parent == child {
                 return Err(robot_error(
                     file,
@@ -647,46 +757,36 @@ impl Robot {
                     &at,
                     format!(
                         "link `{}` is already the child of joint `{}`: a link has one parent",
-                        links[child], parsed.joints[other].name
+                        links[child], raw[other].name
                     ),
                 ));
             }
             parent_joint[child] = Some(ji);
-            use urdf_rs::JointType as T;
-            let kind = match j.joint_type {
-                T::Revolute => JointKind::Revolute,
-                T::Continuous => JointKind::Continuous,
-                T::Prismatic => JointKind::Prismatic,
-                T::Fixed => JointKind::Fixed,
+            let kind = match j.kind {
+                "revolute" => JointKind::Revolute,
+                "continuous" => JointKind::Continuous,
+                "prismatic" => JointKind::Prismatic,
+                "fixed" => JointKind::Fixed,
                 // A floating or planar joint from the root mounts the hand: the mount
                 // holds the base, so it is fixed at its origin (checked below).
-                T::Floating | T::Planar if j.mimic.is_none() => {
-                    base_mounts.push((ji, format!("{:?}", j.joint_type).to_lowercase()));
+                "floating" | "planar" if j.mimic.is_none() => {
+                    base_mounts.push((ji, j.kind));
                     JointKind::Fixed
                 }
-                T::Floating | T::Planar | T::Spherical => {
+                other => {
                     return Err(robot_error(
                         file,
                         &at,
                         format!(
-                            "joint type `{}` is not supported: a hand's joints are revolute, continuous, prismatic or fixed (a floating or planar joint is accepted only as the mount of the whole hand, from the root link)",
-                            format!("{:?}", j.joint_type).to_lowercase()
+                            "joint type `{other}` is not supported: a hand's joints are revolute, continuous, prismatic or fixed (a floating or planar joint is accepted only as the mount of the whole hand, from the root link)"
                         ),
                     ))
                 }
             };
-            // The scan checked every number of <origin> and <axis>.
-            let xyz = Vector3::from(j.origin.xyz.0);
-            let rpy = Vector3::from(j.origin.rpy.0);
-            let origin = Isometry3::from_parts(
-                Translation3::from(xyz),
-                UnitQuaternion::from_euler_angles(rpy.x, rpy.y, rpy.z),
-            );
-            let axis_raw = Vector3::from(j.axis.xyz.0);
             let axis = if kind == JointKind::Fixed {
                 Vector3::x_axis()
             } else {
-                Unit::try_new(axis_raw, 0.0).ok_or_else(|| {
+                Unit::try_new(j.axis, 0.0).ok_or_else(|| {
                     robot_error(
                         file,
                         &at,
@@ -697,7 +797,7 @@ impl Robot {
                     )
                 })?
             };
-            let lim = scan.limits.get(&j.name).copied().unwrap_or_default();
+            let lim = j.limit;
             // An effort of 0 (urdf-rs's default, and a common placeholder) or +inf is
             // no limit.
             let effort = lim.effort.filter(|&e| e > 0.0 && e.is_finite());
@@ -710,44 +810,28 @@ impl Robot {
             let mimic = match &j.mimic {
                 None => None,
                 Some(m) => {
-                    let multiplier = m.multiplier.unwrap_or(1.0);
-                    let offset = m.offset.unwrap_or(0.0);
-                    if !multiplier.is_finite() || !offset.is_finite() {
-                        return Err(robot_error(
+                    let leader = joint_index.get(m.joint.as_str()).copied().ok_or_else(|| {
+                        robot_error(
                             file,
                             &at,
-                            format!("<mimic> needs finite multiplier and offset, got {multiplier} and {offset}"),
-                        ));
-                    }
-                    let leader = parsed
-                        .joints
-                        .iter()
-                        .position(|k| k.name == m.joint)
-                        .ok_or_else(|| {
-                            robot_error(
-                                file,
-                                &at,
-                                format!(
-                                    "<mimic joint=\"{}\">: no joint of that name ({})",
-                                    m.joint,
-                                    nearest(
-                                        &m.joint,
-                                        parsed.joints.iter().map(|k| k.name.as_str())
-                                    )
-                                ),
-                            )
-                        })?;
+                            format!(
+                                "<mimic joint=\"{}\">: no joint of that name ({})",
+                                m.joint,
+                                nearest(&m.joint, raw.iter().map(|k| k.name.as_str()))
+                            ),
+                        )
+                    })?;
                     Some(Mimic {
                         leader,
-                        multiplier,
-                        offset,
+                        multiplier: m.multiplier,
+                        offset: m.offset,
                     })
                 }
             };
             joints.push(Joint {
                 name: j.name.clone(),
                 kind,
-                origin,
+                origin: j.origin,
                 axis,
                 parent,
                 child,
@@ -755,7 +839,7 @@ impl Robot {
                 lower: range.0,
                 upper: range.1,
                 mimic,
-                line: scan.joint_lines.get(&j.name).copied().unwrap_or(0),
+                line: j.line,
             });
         }
         // One root, and every link reached from it (no cycle).
@@ -775,7 +859,7 @@ impl Robot {
                 let names: Vec<String> = many
                     .iter()
                     .take(5)
-                    .map(|&l| format!("`{}` (line {})", links[l], link_line(&links[l])))
+                    .map(|&l| format!("`{}` (line {})", links[l], link_lines[l]))
                     .collect();
                 return Err(robot_error(
                     file,
@@ -827,21 +911,19 @@ impl Robot {
                 file,
                 format!(
                     "<link name=\"{}\"> (line {})",
-                    links[lost],
-                    link_line(&links[lost])
+                    links[lost], link_lines[lost]
                 ),
                 "is on a cycle of joints: it cannot be reached from the root link",
             ));
         }
         let (independent, coupling) =
             resolve_couplings(&joints, file, &mut warnings, |n| joint_at(n))?;
-        let link_lines = links.iter().map(|n| link_line(n)).collect();
         let masses = links
             .iter()
-            .map(|n| scan.masses.get(n).cloned().unwrap_or(LinkMass::None))
+            .map(|n| masses.get(n).cloned().unwrap_or(LinkMass::None))
             .collect();
         Ok(Self {
-            name: parsed.name,
+            name,
             source: file.to_string(),
             links,
             joints,
