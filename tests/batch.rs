@@ -157,6 +157,59 @@ fn several_wrenches_per_line_share_the_grasp() {
     }
 }
 
+/// A hand line's `object` weighs on each of its `wrenches`, as it does on `wrench`.
+#[test]
+fn a_hand_lines_object_weighs_on_each_wrench() {
+    let path = root().join("fixtures/hands/allegro-weighed.json");
+    let mut p: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let model = path
+        .parent()
+        .unwrap()
+        .join(p["hand"]["model"].as_str().unwrap());
+    p["hand"]["model"] = Value::String(model.canonicalize().unwrap().display().to_string());
+    let wrenches = serde_json::json!([
+        [0, 0, 0, 0, 0, 0],
+        [0.1, 0, 0, 0, 0, 0],
+        [0, -0.2, 0.1, 0, 0, 0.001]
+    ]);
+    let mut line = p.clone();
+    line["wrenches"] = wrenches.clone();
+    let dir = temp_dir("object");
+    let input = dir.join("in.jsonl");
+    std::fs::write(&input, format!("{line}\n")).unwrap();
+    let records = lines(&run(&["batch", input.to_str().unwrap()]));
+    assert_eq!(records.len(), 3);
+    let mut objectives = Vec::new();
+    for (k, r) in records.iter().enumerate() {
+        let mut single = p.clone();
+        single["wrench"] = wrenches[k].clone();
+        let file = dir.join(format!("{k}.json"));
+        std::fs::write(&file, single.to_string()).unwrap();
+        let s: Value = serde_json::from_slice(
+            &run(&["solve", file.to_str().unwrap(), "--format", "json"]).stdout,
+        )
+        .unwrap();
+        assert_eq!(
+            (&r["status"], &s["status"]),
+            (&"optimal".into(), &"optimal".into())
+        );
+        let sigma = s["objective"].as_f64().unwrap();
+        assert!(close(&r["objective"], &s["objective"], sigma), "wrench {k}");
+        objectives.push(sigma);
+    }
+    // The file's own answer (no `wrench`: the weight alone) is the first; the others
+    // carry more.
+    let s: Value =
+        serde_json::from_slice(&run(&["solve", path.to_str().unwrap(), "--format", "json"]).stdout)
+            .unwrap();
+    assert!(close(
+        &s["objective"],
+        &records[0]["objective"],
+        objectives[0]
+    ));
+    assert!(objectives[1] != objectives[0] && objectives[2] != objectives[0]);
+}
+
 #[test]
 fn a_malformed_line_is_a_record_and_the_batch_goes_on() {
     let good = std::fs::read_to_string(root().join("fixtures/hand3-pcwf.json"))

@@ -97,6 +97,30 @@ fn text_report_names_joints_and_the_hand() {
         !text.contains("joint_8.0"),
         "ring finger joints move no contact: {text}"
     );
+    // A weighed object: the gravity and what its weight asks of the contacts.
+    let out = run(&["solve", &fixture("hands/allegro-weighed.json")]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains(
+            "gravity [9.81, 0, 0] in the root frame, on the links (passive torques) and the object"
+        ) && text
+            .contains("the object's weight asks [-0.981, 0, 0, 0, 0, 0.004905] of the contacts"),
+        "{text}"
+    );
+    let v = json(&run(&[
+        "solve",
+        &fixture("hands/allegro-weighed.json"),
+        "--format",
+        "json",
+    ]));
+    let w: Vec<f64> = serde_json::from_value(v["hand"]["object_weight"].clone()).unwrap();
+    // −m g along x at 5 mm along y: the moment is about z.
+    let expected = [-0.981, 0.0, 0.0, 0.0, 0.0, 0.005 * 0.981];
+    assert!(w
+        .iter()
+        .zip(expected)
+        .all(|(a, b)| (a - b).abs() <= 4.0 * f64::EPSILON));
 }
 
 #[test]

@@ -559,7 +559,16 @@ actuators, the actuators) of ``torque``'s last axis, in order."""
 
 HandArrays = namedtuple(
     "HandArrays",
-    ["G", "JT", "transmission", "joint_names", "actuator_names", "errors", "passive_torque"],
+    [
+        "G",
+        "JT",
+        "transmission",
+        "joint_names",
+        "actuator_names",
+        "errors",
+        "passive_torque",
+        "object_wrench",
+    ],
 )
 HandArrays.__doc__ = """What ``Hand.arrays`` builds: ``G[B,6,n]`` and ``JT[B,m,n]`` per grasp
 (NaN for a rejected one), the transmission of an MJCF hand with actuators (else None):
@@ -568,7 +577,25 @@ change with the configuration), the names of JT's rows and T's columns, ``errors
 ``{b: message}``, and ``passive_torque[B,m]``: the springs' torques on JT's rows at
 each configuration (MuJoCo's ``qfrc_spring``), plus the links' weight with
 ``gravity``; zero for a hand without either. ``solve_batch`` takes it as
-``passive_torque`` to solve what ``Hand.solve_batch`` solves."""
+``passive_torque`` to solve what ``Hand.solve_batch`` solves. ``object_wrench[B,6]``,
+with ``object_mass``: what the object's weight asks of the contacts, in the object
+frame (add it to the wrenches), else None."""
+
+
+def _object(object_mass, center_of_mass) -> Optional[dict]:
+    """The hand form's ``object``, from ``Hand``'s keywords."""
+    if object_mass is None:
+        if center_of_mass is not None:
+            raise ValueError("center_of_mass: given without object_mass")
+        return None
+    if np.ndim(object_mass) != 0:
+        raise ValueError(f"object_mass: expected one number, got shape {np.shape(object_mass)}")
+    # (`_real` gives a 0-d value one dimension.)
+    mass = _real("object_mass", object_mass).item()
+    com = [0.0, 0.0, 0.0] if center_of_mass is None else _real("center_of_mass", center_of_mass)
+    if np.shape(com) != (3,):
+        raise ValueError(f"center_of_mass: expected [x, y, z], got shape {np.shape(com)}")
+    return {"mass": mass, "center_of_mass": [float(c) for c in com]}
 
 
 class Hand:
@@ -681,15 +708,19 @@ class Hand:
         normals=None,
         object_pose=None,
         gravity=None,
+        object_mass=None,
+        center_of_mass=None,
     ) -> HandArrays:
         """Each grasp's G, Jᵀ and passive torques (the springs', and the links' weight
         with ``gravity``), posed as ``solve_batch`` poses them (same arguments), for
         ``gt.solve_batch``, another solver or a grasp-quality measure. G's columns are the
         contacts' force components in their frames (``docs/geometry.md``), in the object
-        frame about its origin; JT's rows are ``joint_names``."""
+        frame about its origin; JT's rows are ``joint_names``. With ``object_mass`` (and
+        ``gravity``), ``object_wrench`` is its weight's wrench on the contacts."""
         q, P, N, pose = self._poses(joint_positions, positions, normals, object_pose)
         g, rows = _gravity(gravity, q.shape[0])
-        spec_json = _dumps({"contacts": _contacts(contacts), "gravity": g})
+        held = _object(object_mass, center_of_mass)
+        spec_json = _dumps({"contacts": _contacts(contacts), "gravity": g, "object": held})
         d = json.loads(self._native.describe(spec_json))
         B, n, m = q.shape[0], d["force_dim"], len(d["joint_names"])
         G = np.empty((B, 6, n))
@@ -697,9 +728,10 @@ class Hand:
         TP = np.empty((B, m))
         T = None if d["transmission"] is None else np.array(d["transmission"], dtype=np.float64)
         T3 = np.empty((B,) + T.shape) if d["transmission_varies"] else None
-        errors = self._native.arrays(q, P, N, pose, rows, spec_json, G, JT, TP, T3)
+        OW = None if held is None else np.empty((B, 6))
+        errors = self._native.arrays(q, P, N, pose, rows, spec_json, G, JT, TP, T3, OW)
         T = T if T3 is None else T3
-        return HandArrays(G, JT, T, d["joint_names"], d["actuator_names"], dict(errors), TP)
+        return HandArrays(G, JT, T, d["joint_names"], d["actuator_names"], dict(errors), TP, OW)
 
     def solve_batch(
         self,
@@ -711,6 +743,8 @@ class Hand:
         normals=None,
         object_pose=None,
         gravity=None,
+        object_mass=None,
+        center_of_mass=None,
         backend: Optional[str] = None,
         cones: str = "linear",
         sides: Optional[int] = None,
@@ -736,7 +770,8 @@ class Hand:
         contact's ``frame``; a row of NaN, or no array, takes the contact dict's own, or
         the site's), and the object frame at ``object_pose`` (``[7]`` for every grasp or
         ``[B, 7]``, ``[x, y, z, qw, qx, qy, qz]`` in the root link's frame; default the
-        root frame). ``W`` is ``[B, 6]`` or ``[B, K, 6]`` in the object frame.
+        root frame). ``W`` is ``[B, 6]`` or ``[B, K, 6]`` in the object frame: what the
+        contacts must apply to the object.
 
         Every grasp has the same joints: the independent joints that move a contact's
         link (and those an actuator on them drives). ``names`` lists them, the last axis
@@ -744,19 +779,29 @@ class Hand:
         ``torque_limits="model"`` takes the file's limits. ``gravity`` (``[gx, gy,
         gz]`` in the root frame for every grasp, ``[B, 3]`` per grasp for a hand turned
         differently in each, or ``"model"``: an MJCF file's ``<option gravity>``) adds
-        the links' weight to the springs' torques (default: weightless fingers). The solver keywords,
+        the links' weight to the springs' torques (default: weightless fingers).
+        ``object_mass`` (with ``center_of_mass``, ``[x, y, z]`` in the object frame,
+        default its origin) also weighs the object under that gravity, in each grasp's
+        object pose: ``W`` is then what the contacts apply besides (``None``: nothing
+        besides). The solver keywords,
         ``threads``, ``warm_start`` and the preallocated outputs are ``solve_batch``'s.
         A grasp whose input is rejected (a NaN joint position, a normal that is not
         unit) is an ``invalid`` item with its message in ``errors``; only arguments that
         make the whole batch impossible raise ``ValueError``.
         """
         q, P, N, object_pose = self._poses(joint_positions, positions, normals, object_pose)
+        held = _object(object_mass, center_of_mass)
+        if W is None:
+            if held is None:
+                raise ValueError("W: expected [B, 6] or [B, K, 6] wrenches (None only with object_mass)")
+            W = np.zeros((q.shape[0], 6))
         W = _real("W", W)
         W3, single = _wrenches(W)
         B, K = q.shape[0], W3.shape[1]
         spec = {
             "contacts": _contacts(contacts),
             "gravity": None,
+            "object": held,
             "torque_weights": torque_weights,
             "torque_limits": _limits(torque_limits),
             "min_normal_force": min_normal_force,

@@ -2,7 +2,7 @@
 //! `grasp-torque` facade; the conveniences (dicts, keyword defaults, named tuples) live
 //! in `grasp_torque/__init__.py`.
 
-use grasp_torque::hand::{GraspPose, HandContact, HandGrasps, ObjectPose};
+use grasp_torque::hand::{GraspPose, HandContact, HandGrasps, HeldObject, ObjectPose};
 use grasp_torque::{
     file::ContactSpec, file::MatrixFile, for_each_solution, Backend, BatchOptions, BatchSource,
     Error, GraspProblem, GraspSolver, Matrix, Overrides, ProblemError, ProblemParser, SfceSpacing,
@@ -869,6 +869,8 @@ struct HandSpec {
     contacts: Vec<HandContact>,
     /// The hand form's `hand.gravity`: `[gx, gy, gz]` or `"model"`.
     gravity: Option<serde_json::Value>,
+    /// The hand form's `object`: its weight joins every wrench.
+    object: Option<HeldObject>,
     torque_weights: Option<Vec<f64>>,
     torque_limits: Option<serde_json::Value>,
     min_normal_force: Option<serde_json::Value>,
@@ -897,8 +899,9 @@ impl Hand {
                 gravity: spec.gravity,
             },
             object_pose: None,
+            object: spec.object,
             contacts: spec.contacts,
-            wrench: vec![0.0; 6],
+            wrench: Some(vec![0.0; 6]),
             linearization: None,
             torque_weights: spec.torque_weights,
             torque_limits: spec.torque_limits,
@@ -1053,9 +1056,10 @@ impl Hand {
         Ok(value.to_string())
     }
 
-    /// Each grasp's G, Jᵀ and passive joint torques (the springs'; zero without
-    /// springs), written into `g[b]`, `jt[b]` and `tp[b]` (NaN for a rejected grasp,
-    /// whose message is returned with its index).
+    /// Each grasp's G, Jᵀ and passive joint torques (the springs' and, with gravity, the
+    /// links' weight; zero without either), written into `g[b]`, `jt[b]` and `tp[b]`,
+    /// and with `object` the wrench its weight asks of the contacts into `ow[b]` (NaN
+    /// for a rejected grasp, whose message is returned with its index).
     #[allow(clippy::too_many_arguments)]
     fn arrays(
         &self,
@@ -1070,6 +1074,7 @@ impl Hand {
         mut jt: PyReadwriteArrayDyn<'_, f64>,
         mut tp: PyReadwriteArrayDyn<'_, f64>,
         mut tr: Option<PyReadwriteArrayDyn<'_, f64>>,
+        mut ow: Option<PyReadwriteArrayDyn<'_, f64>>,
     ) -> PyResult<Vec<(usize, String)>> {
         let (grasps, _) = self.grasps(from_keywords(spec_json)?, &Settings::default())?;
         let source = Posed::new(grasps, &q, None, &positions, &normals, &poses, &gravity)?;
@@ -1091,6 +1096,10 @@ impl Hand {
             Some(t) => Some(contiguous_out("transmission", t, &[b, m, a])?),
             None => None,
         };
+        let mut ow = match ow.as_mut() {
+            Some(w) => Some(contiguous_out("object_wrench", w, &[b, 6])?),
+            None => None,
+        };
         Ok(py.detach(|| {
             let mut errors = Vec::new();
             let blocks = g
@@ -1109,6 +1118,9 @@ impl Hand {
                         if let (Some(out), Some(t)) = (tr.as_deref_mut(), &p.transmission) {
                             out[i * m * a..(i + 1) * m * a].copy_from_slice(t.matrix.as_slice());
                         }
+                        if let Some(out) = ow.as_deref_mut() {
+                            out[i * 6..(i + 1) * 6].copy_from_slice(&source.wrench(i, 0));
+                        }
                     }
                     Err(e) => {
                         gb.fill(f64::NAN);
@@ -1116,6 +1128,9 @@ impl Hand {
                         tb.fill(f64::NAN);
                         if let Some(out) = tr.as_deref_mut() {
                             out[i * m * a..(i + 1) * m * a].fill(f64::NAN);
+                        }
+                        if let Some(out) = ow.as_deref_mut() {
+                            out[i * 6..(i + 1) * 6].fill(f64::NAN);
                         }
                         errors.push((i, e.to_string()));
                     }
@@ -1306,21 +1321,13 @@ impl BatchSource for Posed<'_> {
     fn problem(&self, b: usize) -> Result<Cow<'_, GraspProblem>, Error> {
         let q = self.q.row(b).to_vec();
         let (positions, normals) = (rows3(&self.positions, b), rows3(&self.normals, b));
-        let object_pose = self.poses.as_ref().map(|o| ObjectPose {
-            position: [o[(b, 0)], o[(b, 1)], o[(b, 2)]],
-            quaternion: [o[(b, 3)], o[(b, 4)], o[(b, 5)], o[(b, 6)]],
-        });
         let mut p = self
             .grasps
             .pose(&GraspPose {
                 joint_positions: &q,
                 positions: positions.as_deref(),
                 normals: normals.as_deref(),
-                object_pose,
-                gravity: self
-                    .gravity
-                    .as_ref()
-                    .map(|g| [g[(b, 0)], g[(b, 1)], g[(b, 2)]]),
+                ..self.placement(b)
             })
             .map_err(Error::from)?;
         // Each wrench is checked when it is solved: a bad first wrench fails only itself.
@@ -1328,9 +1335,34 @@ impl BatchSource for Posed<'_> {
         Ok(Cow::Owned(p))
     }
     fn wrench(&self, b: usize, k: usize) -> [f64; 6] {
-        self.w
+        let mut w = self
+            .w
             .as_ref()
-            .map_or([0.0; 6], |w| std::array::from_fn(|i| w[(b, k, i)]))
+            .map_or([0.0; 6], |w| std::array::from_fn(|i| w[(b, k, i)]));
+        // (Only called once grasp b was posed, so its pose and gravity were checked.)
+        if let Some(weight) = self.grasps.object_weight(&self.placement(b)) {
+            for (w, v) in w.iter_mut().zip(weight) {
+                *w = grasp_torque::problem::flush_subnormal(*w + v);
+            }
+        }
+        w
+    }
+}
+
+impl Posed<'_> {
+    /// Grasp b's object pose and gravity, when given per grasp.
+    fn placement(&self, b: usize) -> GraspPose<'static> {
+        GraspPose {
+            object_pose: self.poses.as_ref().map(|o| ObjectPose {
+                position: [o[(b, 0)], o[(b, 1)], o[(b, 2)]],
+                quaternion: [o[(b, 3)], o[(b, 4)], o[(b, 5)], o[(b, 6)]],
+            }),
+            gravity: self
+                .gravity
+                .as_ref()
+                .map(|g| [g[(b, 0)], g[(b, 1)], g[(b, 2)]]),
+            ..GraspPose::default()
+        }
     }
 }
 

@@ -17,8 +17,9 @@ use std::time::{Duration, Instant};
 pub(crate) struct BatchArgs {
     /// JSON lines: one problem per line, in any of the three forms, optionally with
     /// `"wrenches": [[Fx, Fy, Fz, Mx, My, Mz], …]` to solve it for each (sharing one
-    /// model build). `-` reads standard input. Relative robot paths of hand-form lines
-    /// are relative to the file's folder (the working directory for `-`).
+    /// model build; a hand-form line's `object` weighs on each). `-` reads standard
+    /// input. Relative robot paths of hand-form lines are relative to the file's folder
+    /// (the working directory for `-`).
     input: PathBuf,
     #[command(flatten)]
     model: ModelArgs,
@@ -225,6 +226,28 @@ fn parse_line(
         std::borrow::Cow::Owned(value.to_string())
     };
     let loaded = parser.parse_at(&text, base).map_err(|e| e.to_string())?;
+    // A hand-form line's `object` weighs on every wrench, as on its `wrench`.
+    let weight = loaded.hand.as_ref().and_then(|h| h.object_weight);
+    let wrenches = match weight {
+        None => wrenches,
+        Some(weight) => wrenches
+            .into_iter()
+            .enumerate()
+            .map(|(k, mut w)| {
+                for (x, v) in w.iter_mut().zip(weight) {
+                    *x = grasp_torque::problem::flush_subnormal(*x + v);
+                }
+                if w.iter().all(|&x| grasp_torque::problem::in_domain(x)) {
+                    Ok(w)
+                } else {
+                    Err(format!(
+                        "wrenches[{k}] plus the object's weight: expected each component {}, got {w:?}",
+                        grasp_torque::problem::DOMAIN
+                    ))
+                }
+            })
+            .collect::<Result<_, _>>()?,
+    };
     let mut problem: GraspProblem = loaded.problem;
     let config = model
         .configure(&mut problem)

@@ -207,6 +207,24 @@ fn hand_text(h: &grasp_torque::hand::HandReport) -> String {
         _ => "no limits".into(),
     };
     let _ = writeln!(o, "            {limits}");
+    if let Some(a) = h.gravity {
+        let _ =
+            writeln!(
+            o,
+            "            gravity [{}, {}, {}] in the root frame, on the links (passive torques){}",
+            g(a[0], 5),
+            g(a[1], 5),
+            g(a[2], 5),
+            if h.object_weight.is_some() { " and the object" } else { "" }
+        );
+    }
+    if let Some(w) = h.object_weight {
+        let _ = writeln!(
+            o,
+            "            the object's weight asks [{}] of the contacts (in the wrench)",
+            w.map(|v| g(v, 5)).join(", ")
+        );
+    }
     if !h.unlimited_joints.is_empty() {
         let _ = writeln!(
             o,

@@ -35,8 +35,8 @@ pub struct HandSpec {
     /// The acceleration of gravity on the fingers, `[gx, gy, gz]` in the root frame
     /// (m/s² in SI; a URDF's root link, an MJCF's world), or `"model"` for an MJCF
     /// file's `<option gravity>`: the links' weight then enters as passive joint
-    /// torques. Absent: the fingers are weightless (the object's weight is in the
-    /// wrench either way).
+    /// torques. Absent: the fingers are weightless. It also weighs the held `object`
+    /// when the file gives its mass.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gravity: Option<serde_json::Value>,
 }
@@ -63,6 +63,33 @@ impl Default for ObjectPose {
             position: [0.0; 3],
             quaternion: identity(),
         }
+    }
+}
+
+/// `object`: the held object's mass, whose weight the contacts then carry.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeldObject {
+    /// Its mass, in kg when gravity is in m/s² and forces in N (0 to 1e12).
+    pub mass: f64,
+    /// Its centre of mass in the object frame (default the object frame's origin).
+    #[serde(default)]
+    pub center_of_mass: [f64; 3],
+}
+
+impl HeldObject {
+    /// What the contacts must apply to carry the weight `m g` (`gravity` in the root
+    /// frame, the object frame turned by `rotation` in it): `F = −m Rᵀ g` at the centre
+    /// of mass c, so `[F; c × F]` about the object frame's origin.
+    pub fn weight_wrench(
+        &self,
+        gravity: &Vector3<f64>,
+        rotation: &UnitQuaternion<f64>,
+    ) -> [f64; 6] {
+        let f = rotation.inverse_transform_vector(gravity) * -self.mass;
+        let m = Vector3::from(self.center_of_mass).cross(&f);
+        // (+ 0 reports a zero component as 0, not −0.)
+        [f.x, f.y, f.z, m.x, m.y, m.z].map(|v| flush_subnormal(v) + 0.0)
     }
 }
 
@@ -126,10 +153,17 @@ pub struct HandFile {
     /// The object frame in the root-link frame (default identity).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub object_pose: Option<ObjectPose>,
+    /// The held object's mass and centre of mass: with a gravity (`hand.gravity`), its
+    /// weight is added to `wrench`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub object: Option<HeldObject>,
     /// The contacts; their order is the column order of G.
     pub contacts: Vec<HandContact>,
-    /// `[Fx Fy Fz Mx My Mz]` in the object frame, about its origin.
-    pub wrench: Vec<f64>,
+    /// `[Fx Fy Fz Mx My Mz]` the contacts must apply to the object, in the object frame
+    /// about its origin: required, unless `object` gives its weight (then it is what
+    /// they apply besides, default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wrench: Option<Vec<f64>>,
     /// See the matrix form.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub linearization: Option<grasp_core::cone::Linearization>,
@@ -174,6 +208,10 @@ pub struct HandReport {
     /// weight is part of the passive torques.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gravity: Option<[f64; 3]>,
+    /// With `object`: what its weight asks of the contacts, in the object frame (part
+    /// of the problem's wrench).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub object_weight: Option<[f64; 6]>,
     /// What was loaded but ignored, or looks wrong (one line each).
     pub warnings: Vec<String>,
 }
@@ -302,6 +340,7 @@ impl HandFile {
                 unlimited_joints: grasps.unlimited_joints.clone(),
                 actuator_limits: grasps.actuator_limits.clone(),
                 gravity: grasps.gravity.map(Into::into),
+                object_weight: grasps.object_weight(&GraspPose::default()),
                 warnings,
             },
         })
@@ -480,7 +519,17 @@ impl HandFile {
         for (r, &k) in rows.iter().enumerate() {
             row_of[k] = r;
         }
-        let wrench = crate::file::wrench6(&self.wrench)?;
+        let wrench = match (&self.wrench, &self.object) {
+            (Some(w), _) => crate::file::wrench6(w)?,
+            (None, Some(_)) => [0.0; 6],
+            (None, None) => {
+                return Err(ProblemError::invalid(
+                    "wrench",
+                    "[Fx, Fy, Fz, Mx, My, Mz] in the object frame (or `object` with the mass, and hand.gravity, to carry its weight)",
+                    "missing",
+                ))
+            }
+        };
         let models = contacts.iter().map(|c| c.model).collect();
         let mut p = GraspProblem::new(
             Matrix::zeros(6, 0),
@@ -630,6 +679,10 @@ impl HandFile {
             }
         }
         let gravity = self.hand.gravity(robot)?;
+        let object = self
+            .object
+            .map(|o| held_object(o, gravity.is_some()))
+            .transpose()?;
         // The links a problem's joint carries are posed for their weight; the others
         // load only joints outside the problem.
         let mut weighed = needed.clone();
@@ -644,6 +697,7 @@ impl HandFile {
         }
         let mut grasps = HandGrasps {
             gravity,
+            object,
             weighed,
             robot,
             contacts,
@@ -679,6 +733,30 @@ impl HandFile {
         }
         Ok(grasps)
     }
+}
+
+/// `object`, checked: a mass in the input domain, a finite centre, and a gravity to
+/// weigh it.
+fn held_object(o: HeldObject, weighed: bool) -> Result<HeldObject, ProblemError> {
+    if !(0.0..=MAX_MAGNITUDE).contains(&o.mass) {
+        return Err(ProblemError::invalid(
+            "object.mass",
+            format!("a mass from 0 to {MAX_MAGNITUDE:e}"),
+            o.mass,
+        ));
+    }
+    check_vec(|| "object.center_of_mass".into(), o.center_of_mass, false)?;
+    if !weighed {
+        return Err(ProblemError::invalid(
+            "object.mass",
+            "a gravity to weigh the object: hand.gravity, [gx, gy, gz] in the root frame or \"model\" (an MJCF file's); or no object, and its weight in `wrench`",
+            o.mass,
+        ));
+    }
+    Ok(HeldObject {
+        mass: flush_subnormal(o.mass),
+        center_of_mass: o.center_of_mass.map(flush_subnormal),
+    })
 }
 
 /// A link whose weight gravity needs but the file does not give.
@@ -830,6 +908,8 @@ pub struct HandGrasps<'r> {
     /// `needed` and the links the problem's joints carry: what a pose with gravity
     /// places.
     weighed: Vec<bool>,
+    /// The held object, weighed by each pose's gravity (checked: there is one).
+    object: Option<HeldObject>,
 }
 
 impl HandGrasps<'_> {
@@ -926,6 +1006,18 @@ impl HandGrasps<'_> {
     /// The robot.
     pub fn robot(&self) -> &Robot {
         self.robot
+    }
+
+    /// What the held object's weight asks of the contacts in the grasp `pose` (its
+    /// gravity and object pose, else the file's), in the object frame: `None` without
+    /// `object`. [`HandGrasps::pose`] adds it to the wrench; a batch whose wrenches are
+    /// given per grasp adds it to each. The pose's numbers are those `pose` checks.
+    pub fn object_weight(&self, pose: &GraspPose<'_>) -> Option<[f64; 6]> {
+        let object = self.object.as_ref()?;
+        let gravity = pose.gravity.map(Vector3::from).or(self.gravity)?;
+        let [w, x, y, z] = pose.object_pose.unwrap_or(self.object_pose).quaternion;
+        let rotation = UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z));
+        Some(object.weight_wrench(&gravity, &rotation))
     }
 
     /// Whether each pose has its own transmission: spatial tendons' moment arms
@@ -1135,6 +1227,18 @@ impl HandGrasps<'_> {
             *v = flush_subnormal(*v);
         }
         let mut problem = self.template.clone();
+        if let Some(weight) = self.object_weight(pose) {
+            for (i, (w, v)) in problem.wrench.iter_mut().zip(weight).enumerate() {
+                *w = flush_subnormal(*w + v);
+                if !w.is_finite() || w.abs() > MAX_MAGNITUDE {
+                    return Err(ProblemError::invalid(
+                        "object.mass",
+                        format!("a weight whose wrench, with `wrench`, is at most {MAX_MAGNITUDE:e} in magnitude"),
+                        format!("{w:e} in component {i} of the wrench"),
+                    ));
+                }
+            }
+        }
         self.tendon_arms(&frames, &mut problem)?;
         problem.passive_torque = self.passive_torque(q_ind, &frames, gravity)?;
         problem.grasp_matrix = g;

@@ -70,7 +70,11 @@ fn main() {
         grasps,
         joint_positions: Vec::with_capacity(count),
         positions: Vec::with_capacity(count),
-        wrench: file.wrench.as_slice().try_into().expect("six numbers"),
+        wrench: file
+            .wrench
+            .as_deref()
+            .and_then(|w| w.try_into().ok())
+            .expect("six numbers"),
     };
     for _ in 0..count {
         source
