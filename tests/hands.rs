@@ -285,3 +285,66 @@ fn malformed_robots_and_hand_files_exit_2_with_a_named_error() {
         &["fields of more than one form"],
     );
 }
+
+/// `object_forces`, each contact's force on the object in the object frame, against the
+/// files' own geometry: they sum to the wrench's force, their component along the
+/// contact's normal is its `fz`, and their length is that of its `[fx, fy, fz]` (the
+/// contact frame is orthonormal). Both cone forms, the geometry and hand forms.
+#[test]
+fn object_forces_follow_the_normals_and_sum_to_the_wrench() {
+    for name in [
+        "geometry/pinch.json",
+        "hands/allegro-pinch.json",
+        "hands/allegro-weighed.json",
+    ] {
+        let file: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(fixture(name)).unwrap()).unwrap();
+        for cones in ["linear", "exact"] {
+            let v = json(&run(&[
+                "solve",
+                &fixture(name),
+                "--cones",
+                cones,
+                "--format",
+                "json",
+            ]));
+            let wrench: Vec<f64> = serde_json::from_value(
+                v["hand"]
+                    .get("object_weight")
+                    .unwrap_or(&file["wrench"])
+                    .clone(),
+            )
+            .unwrap();
+            let forces: Vec<[f64; 3]> = serde_json::from_value(v["object_forces"].clone()).unwrap();
+            let components: Vec<Vec<f64>> =
+                serde_json::from_value(v["contact_forces"].clone()).unwrap();
+            let scale = components
+                .iter()
+                .flatten()
+                .fold(0.0f64, |a, b| a.max(b.abs()));
+            let tol = 1e-12 * scale;
+            for k in 0..3 {
+                let sum: f64 = forces.iter().map(|f| f[k]).sum();
+                assert!(
+                    (sum - wrench[k]).abs() <= tol,
+                    "{name} {cones}: {sum} vs {wrench:?}"
+                );
+            }
+            for (i, (f, c)) in forces.iter().zip(&components).enumerate() {
+                // (The files' normals are unit to 1e-6; the contact frame's exactly.)
+                let n: Vec<f64> =
+                    serde_json::from_value(file["contacts"][i]["normal"].clone()).unwrap();
+                let along = (0..3).map(|k| f[k] * n[k]).sum::<f64>()
+                    / n.iter().map(|x| x * x).sum::<f64>().sqrt();
+                let fz = c[if c.len() == 1 { 0 } else { 2 }];
+                assert!((along - fz).abs() <= tol, "{name} {cones} contact {i}");
+                let len = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+                let tangential_and_normal = len(&c[..c.len().min(3)]);
+                assert!(
+                    (len(f) - tangential_and_normal).abs() <= tol,
+                    "{name} {cones} {i}"
+                );
+            }
+        }
+    }
+}

@@ -284,6 +284,8 @@ struct ResultData {
     reason: Option<serde_json::Value>,
     torque: Option<Vec<f64>>,
     contact_forces: Option<Vec<f64>>,
+    /// Each contact's force on the object in the wrench's frame.
+    object_forces: Option<Vec<[f64; 3]>>,
     contact_dims: Vec<usize>,
     internal_forces: Vec<f64>,
     objective: Option<f64>,
@@ -323,6 +325,13 @@ impl SolveResult {
                 reason,
                 torque: ok.then(|| s.torque.clone()),
                 contact_forces: (ok && !d.deferred).then(|| s.contact_forces.clone()),
+                object_forces: (ok && !d.deferred).then(|| {
+                    grasp_torque::model::object_forces(
+                        &p.grasp_matrix,
+                        &p.contacts,
+                        &s.contact_forces,
+                    )
+                }),
                 contact_dims: p.contacts.iter().map(|c| c.dim()).collect(),
                 internal_forces: s.internal_forces.clone(),
                 objective: ok.then_some(s.objective),
@@ -397,6 +406,15 @@ impl SolveResult {
     #[getter]
     fn contact_forces<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
         self.data.contact_forces.clone().map(|t| t.into_pyarray(py))
+    }
+
+    /// Each contact's force on the object, `[k, 3]` in the wrench's (object) frame:
+    /// G's force rows times its components (None without forces).
+    #[getter]
+    fn object_forces<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
+        let f = self.data.object_forces.as_ref()?;
+        let rows: Vec<Vec<f64>> = f.iter().map(|r| r.to_vec()).collect();
+        PyArray2::from_vec2(py, &rows).ok()
     }
 
     #[getter]

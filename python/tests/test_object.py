@@ -106,3 +106,25 @@ def test_bad_object_arguments_are_named():
     a = hand.arrays(Q, contacts, object_pose=pose, gravity=g, object_mass=0.1)
     assert set(a.errors) == {2} and "quaternion" in a.errors[2]
     assert np.isnan(a.object_wrench[2]).all() and np.isfinite(a.object_wrench[[0, 1, 3]]).all()
+
+
+def test_object_forces_carry_the_weight():
+    path = ROOT / "fixtures/hands/allegro-weighed.json"
+    weight = np.array(gt.Problem.load(path).hand["object_weight"])
+    for cones in ("linear", "exact"):
+        r = gt.Solver(path, cones=cones).solve()
+        F = r.object_forces
+        assert F.shape == (3, 3)
+        # Each contact's force in the object frame: together, the weight's reaction.
+        np.testing.assert_allclose(F.sum(axis=0), weight[:3], rtol=0, atol=1e-12)
+        # And the components in each contact's frame have the same length.
+        for f, c in zip(F, r.forces_per_contact):
+            assert abs(np.linalg.norm(f) - np.linalg.norm(c)) <= 1e-12
+        # Pickled and back.
+        import pickle
+
+        np.testing.assert_array_equal(pickle.loads(pickle.dumps(r)).object_forces, F)
+    # The lazy check defers them with the other forces.
+    s = gt.Solver(path, check="lazy")
+    assert s.solve().object_forces is None
+    np.testing.assert_allclose(s.diagnose().object_forces.sum(axis=0), weight[:3], atol=1e-12)

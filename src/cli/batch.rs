@@ -441,6 +441,14 @@ fn record(line: usize, k: usize, p: &GraspProblem, s: &Solution, format: BatchFo
                     .collect();
                 o.insert("contact_forces".into(), json!(forces));
                 o.insert(
+                    "object_forces".into(),
+                    json!(grasp_torque::model::object_forces(
+                        &p.grasp_matrix,
+                        &p.contacts,
+                        &s.contact_forces
+                    )),
+                );
+                o.insert(
                     "residuals".into(),
                     json!({"wrench": d.wrench_residual, "torque": d.torque_residual, "consistency": d.consistency_residual}),
                 );

@@ -108,7 +108,13 @@ pub(crate) fn to_json(
     let ok = !s.torque.is_empty();
     let o = v.as_object_mut().expect("a struct serialises to an object");
     if !ok {
-        for key in ["torque", "contact_forces", "objective", "internal_forces"] {
+        for key in [
+            "torque",
+            "contact_forces",
+            "object_forces",
+            "objective",
+            "internal_forces",
+        ] {
             o.insert(key.into(), json!(null));
         }
     } else {
@@ -116,6 +122,17 @@ pub(crate) fn to_json(
             "contact_forces".into(),
             json!(per_contact(qp, &s.contact_forces)),
         );
+        // (Deferred by the lazy check, f is empty.)
+        if !s.contact_forces.is_empty() {
+            o.insert(
+                "object_forces".into(),
+                json!(grasp_torque::model::object_forces(
+                    &model.grasp_matrix,
+                    &model.contacts,
+                    &s.contact_forces
+                )),
+            );
+        }
     }
     let d = &s.diagnostics;
     o.insert(

@@ -814,3 +814,18 @@ impl GraspModel {
                 .max(f64::MIN_POSITIVE)
     }
 }
+
+/// Each contact's force on the object, `[Fx, Fy, Fz]` in the wrench's frame: the force
+/// rows of G's columns times the contact's components of `f`, in contact order (a soft
+/// finger's torsion adds no force). They sum to the wrench's force when `G f = w`.
+pub fn object_forces(grasp_matrix: &Matrix, contacts: &[ContactModel], f: &[f64]) -> Vec<[f64; 3]> {
+    let mut start = 0;
+    contacts
+        .iter()
+        .map(|c| {
+            let cols = start..start + c.dim();
+            start = cols.end;
+            std::array::from_fn(|r| cols.clone().map(|k| grasp_matrix[(r, k)] * f[k]).sum())
+        })
+        .collect()
+}
