@@ -1209,13 +1209,9 @@ impl Hand {
                 let pose = r.pose_of(&qb, &needed);
                 for (i, &(link, offset)) in frames.iter().enumerate() {
                     let x = pose.links[link] * offset;
-                    pb[3 * i..3 * i + 3].copy_from_slice(x.translation.vector.as_slice());
+                    pb[3 * i..3 * i + 3].copy_from_slice(&x.translation.to_array());
                     let m = x.rotation.to_rotation_matrix();
-                    for (a, row3) in rb[9 * i..9 * i + 9].chunks_exact_mut(3).enumerate() {
-                        for (c, e) in row3.iter_mut().enumerate() {
-                            *e = m[(a, c)];
-                        }
-                    }
+                    rb[9 * i..9 * i + 9].copy_from_slice(m.as_flattened());
                 }
             }
         });

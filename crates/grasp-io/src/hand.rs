@@ -9,6 +9,7 @@
 //! multipliers.
 
 use crate::file::{ModelName, Options};
+use crate::frame::{Isometry3, UnitQuaternion, Vector3};
 use crate::geometry::{check_vec, contact_frame, UNIT_TOLERANCE};
 use crate::urdf::{nearest, Drive, JointKind, Pose, Robot};
 use grasp_core::contact::ContactModel;
@@ -17,7 +18,6 @@ use grasp_core::matrix::Matrix;
 use grasp_core::problem::{
     contact_count, flush_subnormal, GraspProblem, MAX_JOINTS, MAX_MAGNITUDE,
 };
-use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -81,11 +81,7 @@ impl HeldObject {
     /// What the contacts must apply to carry the weight `m g` (`gravity` in the root
     /// frame, the object frame turned by `rotation` in it): `F = −m Rᵀ g` at the centre
     /// of mass c, so `[F; c × F]` about the object frame's origin.
-    pub fn weight_wrench(
-        &self,
-        gravity: &Vector3<f64>,
-        rotation: &UnitQuaternion<f64>,
-    ) -> [f64; 6] {
+    pub fn weight_wrench(&self, gravity: &Vector3, rotation: &UnitQuaternion) -> [f64; 6] {
         let f = rotation.inverse_transform_vector(gravity) * -self.mass;
         let m = Vector3::from(self.center_of_mass).cross(&f);
         // (+ 0 reports a zero component as 0, not −0.)
@@ -770,7 +766,7 @@ fn unknown_mass(why: &str) -> ProblemError {
 
 impl HandSpec {
     /// `gravity` as a vector in the root frame, checked.
-    fn gravity(&self, robot: &Robot) -> Result<Option<Vector3<f64>>, ProblemError> {
+    fn gravity(&self, robot: &Robot) -> Result<Option<Vector3>, ProblemError> {
         let expected = "\"model\" (the MJCF file's <option gravity>) or [gx, gy, gz] in the root frame, finite, of magnitude at most 1e12";
         let g = match &self.gravity {
             None | Some(serde_json::Value::Null) => return Ok(None),
@@ -904,7 +900,7 @@ pub struct HandGrasps<'r> {
     /// The columns of T that spatial tendons give: (column, tendon, gear).
     tendon_columns: Vec<(usize, usize, f64)>,
     /// Gravity on the fingers, in the root frame.
-    gravity: Option<Vector3<f64>>,
+    gravity: Option<Vector3>,
     /// `needed` and the links the problem's joints carry: what a pose with gravity
     /// places.
     weighed: Vec<bool>,
@@ -941,7 +937,7 @@ impl HandGrasps<'_> {
         &self,
         q_ind: &[f64],
         frames: &Pose,
-        gravity: Option<Vector3<f64>>,
+        gravity: Option<Vector3>,
     ) -> Result<Option<Vec<f64>>, ProblemError> {
         if self.robot.springs.is_empty() && gravity.is_none() {
             return Ok(None);
@@ -1016,7 +1012,7 @@ impl HandGrasps<'_> {
         let object = self.object.as_ref()?;
         let gravity = pose.gravity.map(Vector3::from).or(self.gravity)?;
         let [w, x, y, z] = pose.object_pose.unwrap_or(self.object_pose).quaternion;
-        let rotation = UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z));
+        let rotation = UnitQuaternion::new_normalize(w, x, y, z);
         Some(object.weight_wrench(&gravity, &rotation))
     }
 
@@ -1085,8 +1081,8 @@ impl HandGrasps<'_> {
             ));
         }
         let object = Isometry3::from_parts(
-            Translation3::from(Vector3::from(object_pose.position)),
-            UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
+            Vector3::from(object_pose.position),
+            UnitQuaternion::new_normalize(w, x, y, z),
         );
         let to_object = object.inverse();
         let gravity = match pose.gravity {
@@ -1141,7 +1137,7 @@ impl HandGrasps<'_> {
                     match self.frames[i] {
                         ContactFrame::Object => (Vector3::from(position), Vector3::from(normal)),
                         ContactFrame::Link => (
-                            (to * Point3::from(position)).coords,
+                            to.transform_point(&Vector3::from(position)),
                             to.rotation * Vector3::from(normal),
                         ),
                     }
@@ -1160,14 +1156,14 @@ impl HandGrasps<'_> {
                         (Some(n), ContactFrame::Object) => Vector3::from(n),
                         (Some(n), ContactFrame::Link) => to.rotation * Vector3::from(n),
                     };
-                    (frame.translation.vector, n)
+                    (frame.translation, n)
                 }
             };
-            if p.iter().any(|v| v.abs() > MAX_MAGNITUDE) {
+            if p.to_array().iter().any(|v| v.abs() > MAX_MAGNITUDE) {
                 return Err(ProblemError::invalid(
                     format!("{}.position", at()),
                     format!("a point within {MAX_MAGNITUDE:e} of the object origin"),
-                    format!("{:?} in the object frame", p.as_slice()),
+                    format!("{:?} in the object frame", p.to_array()),
                 ));
             }
             // The frame convention normalises n exactly, as the geometry form does.
@@ -1177,10 +1173,7 @@ impl HandGrasps<'_> {
         let mut axes = vec![(Vector3::zeros(), Vector3::zeros()); robot.joints.len()];
         for &j in &self.moving {
             let t = to_object * frames.joints[j];
-            axes[j] = (
-                t.rotation * robot.joints[j].axis.into_inner(),
-                t.translation.vector,
-            );
+            axes[j] = (t.rotation * robot.joints[j].axis, t.translation);
         }
         let m = self.rows.len();
         let nf = self.contacts.iter().map(|c| c.model.dim()).sum();
@@ -1190,11 +1183,11 @@ impl HandGrasps<'_> {
         for (c, &(p, n)) in self.contacts.iter().zip(&placed) {
             let [t1, t2, n] = contact_frame([n.x, n.y, n.z]);
             let n = Vector3::from(n);
-            let dirs: &[Vector3<f64>] = match c.model {
+            let dirs: &[Vector3] = match c.model {
                 ContactModel::Fpc => &[n],
                 _ => &[Vector3::from(t1), Vector3::from(t2), n],
             };
-            let mut column = |d: Vector3<f64>, torsion: bool| {
+            let mut column = |d: Vector3, torsion: bool| {
                 let moment = if torsion { d } else { p.cross(&d) };
                 let force = if torsion { Vector3::zeros() } else { d };
                 for (r, v) in [force.x, force.y, force.z, moment.x, moment.y, moment.z]
@@ -1206,7 +1199,7 @@ impl HandGrasps<'_> {
                 for &j in &c.chain {
                     let (a, o) = &axes[j];
                     let entry = match (robot.joints[j].kind.rotates(), torsion) {
-                        (true, false) => d.dot(&a.cross(&(p - o))),
+                        (true, false) => d.dot(&a.cross(&(p - *o))),
                         (true, true) => d.dot(a),
                         (false, false) => d.dot(a),
                         (false, true) => 0.0,

@@ -6,6 +6,7 @@
 //! [`GraspProblem`].
 
 pub mod file;
+pub mod frame;
 pub mod geometry;
 pub mod hand;
 pub mod mass;

@@ -3,8 +3,8 @@
 //! Pinocchio's `−computeGeneralizedGravity`), which enter the grasp as passive torques
 //! (`Jᵀ f = T u + τ_p`).
 
+use crate::frame::Vector3;
 use crate::urdf::{JointKind, Pose, Robot};
-use nalgebra::Vector3;
 
 /// What a link weighs.
 #[derive(Clone, Debug, PartialEq)]
@@ -19,7 +19,7 @@ pub enum LinkMass {
         /// The mass.
         mass: f64,
         /// The centre of mass, in the link's frame.
-        com: Vector3<f64>,
+        com: Vector3,
     },
     /// Not known, and why (a malformed `<inertial>`, a mass from a mesh): an error
     /// only when gravity is asked for and a moving joint carries the link.
@@ -33,7 +33,7 @@ impl Robot {
     /// mass the joint carries, `S` its first moment and `o`, `a` the joint's anchor
     /// and axis; on a slide, `M (a · g)`. `Err` names a link whose mass is not known
     /// and that a moving joint carries.
-    pub fn gravity_torques(&self, pose: &Pose, g: &Vector3<f64>) -> Result<Vec<f64>, String> {
+    pub fn gravity_torques(&self, pose: &Pose, g: &Vector3) -> Result<Vec<f64>, String> {
         let n = self.links.len();
         let (mut carried, mut moment) = (vec![0.0; n], vec![Vector3::zeros(); n]);
         for &l in self.order.iter().rev() {
@@ -41,7 +41,7 @@ impl Robot {
                 LinkMass::None => {}
                 LinkMass::Known { mass, com } => {
                     carried[l] += mass;
-                    moment[l] += *mass * pose.links[l].transform_point(&(*com).into()).coords;
+                    moment[l] += *mass * pose.links[l].transform_point(com);
                 }
                 LinkMass::Unknown(why) => {
                     let moves = self
@@ -67,11 +67,11 @@ impl Robot {
             .map(|(j, joint)| {
                 let c = joint.child;
                 let frame = pose.joints[j];
-                let axis = frame.rotation * joint.axis.into_inner();
+                let axis = frame.rotation * joint.axis;
                 match joint.kind {
                     JointKind::Fixed => 0.0,
                     k if k.rotates() => {
-                        g.dot(&axis.cross(&(moment[c] - carried[c] * frame.translation.vector)))
+                        g.dot(&axis.cross(&(moment[c] - carried[c] * frame.translation)))
                     }
                     _ => carried[c] * axis.dot(g),
                 }

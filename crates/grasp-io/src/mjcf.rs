@@ -30,6 +30,7 @@
 //! that cannot be read fails only what needs it (a tendon, gravity). Other elements are
 //! ignored, with one warning per element name.
 
+use crate::frame::{Isometry3, UnitQuaternion, Vector3};
 use crate::mass::LinkMass;
 use crate::tendon::{PathPoint, SpatialTendon, Spring, SpringOn, WrapGeom, WrapShape};
 use crate::urdf::{
@@ -37,7 +38,6 @@ use crate::urdf::{
     MAX_DEPTH, MAX_LINKS,
 };
 use grasp_core::error::ProblemError;
-use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::collections::{BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -455,7 +455,7 @@ impl<'a> View<'a> {
 
     /// A site's or geom's frame: from `fromto` (centred between the points, the z axis
     /// along them) when given, else [`View::frame`].
-    fn placement(&self, c: Compiler) -> Result<Isometry3<f64>, ProblemError> {
+    fn placement(&self, c: Compiler) -> Result<Isometry3, ProblemError> {
         let Some(ft) = self.fixed::<6>("fromto")? else {
             return self.frame(c);
         };
@@ -468,16 +468,13 @@ impl<'a> View<'a> {
         let rot = if dir.norm() < 1e-12 {
             UnitQuaternion::identity()
         } else {
-            z_to(Unit::new_normalize(dir))
+            z_to(dir.normalize())
         };
-        Ok(Isometry3::from_parts(
-            Translation3::from((a + b) / 2.0),
-            rot,
-        ))
+        Ok(Isometry3::from_parts((a + b) / 2.0, rot))
     }
 
     /// `pos` and the orientation (at most one of quat, euler, axisangle, xyaxes, zaxis).
-    fn frame(&self, c: Compiler) -> Result<Isometry3<f64>, ProblemError> {
+    fn frame(&self, c: Compiler) -> Result<Isometry3, ProblemError> {
         let pos = self.fixed::<3>("pos")?.unwrap_or([0.0; 3]);
         let given: Vec<&str> = ["quat", "euler", "axisangle", "xyaxes", "zaxis"]
             .into_iter()
@@ -500,11 +497,10 @@ impl<'a> View<'a> {
             None => UnitQuaternion::identity(),
             Some("quat") => {
                 let [w, x, y, z] = self.fixed::<4>("quat")?.unwrap_or([1.0, 0.0, 0.0, 0.0]);
-                let q = nalgebra::Quaternion::new(w, x, y, z);
-                if q.norm() < 1e-10 {
+                if ((x * x + z * z) + (y * y + w * w)).sqrt() < 1e-10 {
                     return Err(self.r.err(self.e, "quat: a zero quaternion"));
                 }
-                UnitQuaternion::from_quaternion(q)
+                UnitQuaternion::new_normalize(w, x, y, z)
             }
             Some("axisangle") => {
                 let [x, y, z, a] = self.fixed::<4>("axisangle")?.unwrap_or_default();
@@ -516,9 +512,9 @@ impl<'a> View<'a> {
                 let mut q = UnitQuaternion::identity();
                 for (k, &ch) in c.eulerseq.iter().enumerate() {
                     let axis = match ch.to_ascii_lowercase() {
-                        b'x' => Vector3::x_axis(),
-                        b'y' => Vector3::y_axis(),
-                        _ => Vector3::z_axis(),
+                        b'x' => Vector3::x(),
+                        b'y' => Vector3::y(),
+                        _ => Vector3::z(),
                     };
                     let r = UnitQuaternion::from_axis_angle(&axis, angle(e[k]));
                     // Lower case: about the moving axes (intrinsic); upper case: fixed.
@@ -532,7 +528,7 @@ impl<'a> View<'a> {
             }
             Some("xyaxes") => {
                 let v = self.fixed::<6>("xyaxes")?.unwrap_or_default();
-                let x = unit(self, "xyaxes", [v[0], v[1], v[2]])?.into_inner();
+                let x = unit(self, "xyaxes", [v[0], v[1], v[2]])?;
                 let y0 = Vector3::new(v[3], v[4], v[5]);
                 let y = y0 - x * x.dot(&y0);
                 if y.norm() < 1e-10 {
@@ -542,9 +538,12 @@ impl<'a> View<'a> {
                 }
                 let y = y.normalize();
                 let z = x.cross(&y);
-                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(
-                    Matrix3::from_columns(&[x, y, z]),
-                ))
+                // The axes are the matrix's columns.
+                UnitQuaternion::from_rotation_matrix(&[
+                    [x.x, y.x, z.x],
+                    [x.y, y.y, z.y],
+                    [x.z, y.z, z.z],
+                ])
             }
             Some(_) => {
                 let z = unit(
@@ -555,27 +554,23 @@ impl<'a> View<'a> {
                 z_to(z)
             }
         };
-        Ok(Isometry3::from_parts(
-            Translation3::from(Vector3::from(pos)),
-            rot,
-        ))
+        Ok(Isometry3::from_parts(Vector3::from(pos), rot))
     }
 }
 
 /// The rotation that takes (0, 0, 1) to `z` by the shortest arc (π about x when `z`
 /// points down), as MuJoCo's `zaxis`.
-fn z_to(z: Unit<Vector3<f64>>) -> UnitQuaternion<f64> {
-    UnitQuaternion::rotation_between(&Vector3::z(), &z).unwrap_or_else(|| {
-        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
-    })
+fn z_to(z: Vector3) -> UnitQuaternion {
+    UnitQuaternion::rotation_between(&Vector3::z(), &z)
+        .unwrap_or_else(|| UnitQuaternion::from_axis_angle(&Vector3::x(), std::f64::consts::PI))
 }
 
-fn unit(v: &View, key: &str, x: [f64; 3]) -> Result<Unit<Vector3<f64>>, ProblemError> {
+fn unit(v: &View, key: &str, x: [f64; 3]) -> Result<Vector3, ProblemError> {
     let x = Vector3::from(x);
     if x.norm() < 1e-10 {
         return Err(v.r.err(v.e, format!("{key}: a zero axis")));
     }
-    Ok(Unit::new_normalize(x))
+    Ok(x.normalize())
 }
 
 /// The tree being built.
@@ -605,7 +600,7 @@ struct Tree {
 }
 
 /// A mass (kg) at a point of its link's frame, or why it is not known.
-type PointMass = Result<(f64, Vector3<f64>), String>;
+type PointMass = Result<(f64, Vector3), String>;
 
 /// What a body's mass is computed from.
 struct Body {
@@ -614,7 +609,7 @@ struct Body {
     inertial: Option<PointMass>,
     gravcomp: f64,
     /// Its `pos` attribute.
-    pos: Vector3<f64>,
+    pos: Vector3,
 }
 
 impl Tree {
@@ -629,8 +624,8 @@ impl Tree {
         &mut self,
         name: String,
         kind: JointKind,
-        origin: Isometry3<f64>,
-        axis: Unit<Vector3<f64>>,
+        origin: Isometry3,
+        axis: Vector3,
         parent: usize,
         child: usize,
         range: Option<(f64, f64)>,
@@ -689,7 +684,7 @@ impl Ctx<'_> {
         e: &El,
         parent: usize,
         childclass: &str,
-        offset: Isometry3<f64>,
+        offset: Isometry3,
         top: bool,
     ) -> Result<(), ProblemError> {
         if t.links.len() >= MAX_LINKS {
@@ -802,7 +797,7 @@ impl Ctx<'_> {
                 } else {
                     JointKind::Prismatic
                 },
-                origin * Translation3::from(pos),
+                origin * Isometry3::from_parts(pos, UnitQuaternion::identity()),
                 axis,
                 at,
                 child,
@@ -811,7 +806,7 @@ impl Ctx<'_> {
                 j.line,
             );
             at = child;
-            origin = Isometry3::from_parts(Translation3::from(-pos), UnitQuaternion::identity());
+            origin = Isometry3::from_parts(-pos, UnitQuaternion::identity());
         }
         let link = t.add_link(name.clone(), e.line);
         if t.body_link.insert(name.clone(), link).is_some() && e.attr("name").is_some() {
@@ -821,7 +816,7 @@ impl Ctx<'_> {
             format!("{name} (fixed)"),
             JointKind::Fixed,
             origin,
-            Vector3::z_axis(),
+            Vector3::z(),
             at,
             link,
             None,
@@ -857,7 +852,7 @@ impl Ctx<'_> {
         name: &str,
         link: usize,
         childclass: &str,
-        offset: Isometry3<f64>,
+        offset: Isometry3,
     ) -> Result<WrapGeom, ProblemError> {
         let v = self.view(e, "geom", childclass);
         let shape = match v.get("type").unwrap_or("sphere") {
@@ -897,7 +892,7 @@ impl Ctx<'_> {
         &self,
         e: &El,
         childclass: &str,
-        offset: Isometry3<f64>,
+        offset: Isometry3,
     ) -> Result<Option<PointMass>, String> {
         let v = self.view(e, "geom", childclass);
         let at = |m: ProblemError| m.to_string();
@@ -948,9 +943,7 @@ impl Ctx<'_> {
         if mass < 0.0 {
             return Err(format!("{here}: a negative mass ({mass})"));
         }
-        let centre = (offset * v.placement(self.c).map_err(at)?)
-            .translation
-            .vector;
+        let centre = (offset * v.placement(self.c).map_err(at)?).translation;
         Ok(Some(Ok((mass, centre))))
     }
 
@@ -962,7 +955,7 @@ impl Ctx<'_> {
         e: &El,
         link: usize,
         childclass: &str,
-        offset: Isometry3<f64>,
+        offset: Isometry3,
         top: bool,
     ) -> Result<(), ProblemError> {
         for c in &e.children {

@@ -10,8 +10,8 @@
 //! difference of its ends' velocities, with the tangent points fixed to the geom's body
 //! (the arc on the geom moves rigidly with it).
 
+use crate::frame::{Isometry3, Vector3};
 use crate::urdf::{JointKind, Pose, Robot};
-use nalgebra::{Isometry3, Point3, Vector3};
 
 /// Below this a length, a squared length or a determinant is zero (MuJoCo's
 /// `mjMINVAL`): the same rule picks the same side and the same "no wrap".
@@ -34,7 +34,7 @@ pub struct WrapGeom {
     /// The link it is on.
     pub link: usize,
     /// Its frame in the link's frame (a cylinder's axis is its z axis).
-    pub frame: Isometry3<f64>,
+    pub frame: Isometry3,
     /// Its radius (`size[0]`), in the model's length unit.
     pub radius: f64,
     /// Sphere or cylinder.
@@ -165,30 +165,28 @@ impl Robot {
         let mut length = 0.0;
         let site = |s: usize| {
             let at = pose.links[self.sites[s].link] * self.sites[s].frame;
-            (Point3::from(at.translation.vector), self.sites[s].link)
+            (at.translation, self.sites[s].link)
         };
         // One straight piece from `a` (on link la) to `b` (on lb), weighted by 1/divisor.
-        let piece = |(a, la): (Point3<f64>, usize),
-                     (b, lb): (Point3<f64>, usize),
-                     scale: f64,
-                     arms: &mut [f64]| {
-            let d = b - a;
-            let n = d.norm();
-            if la == lb || n < TINY {
-                return n;
-            }
-            let u = d / n;
-            let (ca, cb) = (self.moving_chain(la), self.moving_chain(lb));
-            for (k, &j) in joints.iter().enumerate() {
-                let (on_a, on_b) = (ca.contains(&j), cb.contains(&j));
-                if on_a != on_b {
-                    let p = if on_b { b } else { a };
-                    let v = self.point_velocity(j, pose, &p);
-                    arms[k] += scale * if on_b { u.dot(&v) } else { -u.dot(&v) };
+        let piece =
+            |(a, la): (Vector3, usize), (b, lb): (Vector3, usize), scale: f64, arms: &mut [f64]| {
+                let d = b - a;
+                let n = d.norm();
+                if la == lb || n < TINY {
+                    return n;
                 }
-            }
-            n
-        };
+                let u = d / n;
+                let (ca, cb) = (self.moving_chain(la), self.moving_chain(lb));
+                for (k, &j) in joints.iter().enumerate() {
+                    let (on_a, on_b) = (ca.contains(&j), cb.contains(&j));
+                    if on_a != on_b {
+                        let p = if on_b { b } else { a };
+                        let v = self.point_velocity(j, pose, &p);
+                        arms[k] += scale * if on_b { u.dot(&v) } else { -u.dot(&v) };
+                    }
+                }
+                n
+            };
         let mut divisor = 1.0;
         let mut k = 0;
         while k < t.path.len() {
@@ -263,11 +261,11 @@ impl Robot {
     }
 
     /// The velocity of point `p` (fixed to a link below joint `j`) per unit of `q_j`.
-    fn point_velocity(&self, j: usize, pose: &Pose, p: &Point3<f64>) -> Vector3<f64> {
+    fn point_velocity(&self, j: usize, pose: &Pose, p: &Vector3) -> Vector3 {
         let frame = pose.joints[j];
-        let axis = frame.rotation * self.joints[j].axis.into_inner();
+        let axis = frame.rotation * self.joints[j].axis;
         if self.joints[j].kind.rotates() {
-            axis.cross(&(p.coords - frame.translation.vector))
+            axis.cross(&(*p - frame.translation))
         } else {
             axis
         }
@@ -279,16 +277,16 @@ impl Robot {
 /// when the side site is inside the geom.
 #[allow(clippy::type_complexity)]
 pub(crate) fn wrap(
-    x0: &Point3<f64>,
-    x1: &Point3<f64>,
-    frame: &Isometry3<f64>,
+    x0: &Vector3,
+    x1: &Vector3,
+    frame: &Isometry3,
     radius: f64,
     shape: WrapShape,
-    side: Option<&Point3<f64>>,
-) -> Result<Option<(Point3<f64>, Point3<f64>, f64)>, ()> {
+    side: Option<&Vector3>,
+) -> Result<Option<(Vector3, Vector3, f64)>, ()> {
     let (p0, p1) = (
-        frame.inverse_transform_point(x0).coords,
-        frame.inverse_transform_point(x1).coords,
+        frame.inverse_transform_point(x0),
+        frame.inverse_transform_point(x1),
     );
     if p0.norm() < TINY || p1.norm() < TINY {
         return Ok(None);
@@ -311,7 +309,7 @@ pub(crate) fn wrap(
                 } else {
                     0
                 };
-                let mut other = Vector3::repeat(1.0);
+                let mut other = Vector3::new(1.0, 1.0, 1.0);
                 other[i] = 0.0;
                 normal = ax0.cross(&other).normalize();
             } else {
@@ -320,12 +318,12 @@ pub(crate) fn wrap(
             (ax0, normal.cross(&ax0).normalize())
         }
     };
-    let flat = |v: &Vector3<f64>| [v.dot(&ax0), v.dot(&ax1)];
+    let flat = |v: &Vector3| [v.dot(&ax0), v.dot(&ax1)];
     let (d0, d1) = (flat(&p0), flat(&p1));
     let side = match side {
         None => None,
         Some(s) => {
-            let s = frame.inverse_transform_point(s).coords;
+            let s = frame.inverse_transform_point(s);
             if s.norm() < radius {
                 return Err(());
             }
@@ -349,8 +347,8 @@ pub(crate) fn wrap(
         arc = (arc * arc + height * height).sqrt();
     }
     Ok(Some((
-        frame.transform_point(&Point3::from(r0)),
-        frame.transform_point(&Point3::from(r1)),
+        frame.transform_point(&r0),
+        frame.transform_point(&r1),
         arc,
     )))
 }

@@ -17,10 +17,10 @@
 //! joint follows `q = multiplier · q_leader + offset`; chains of mimics are resolved to
 //! the independent joint at their end.
 
+use crate::frame::{Isometry3, UnitQuaternion, Vector3};
 use crate::mass::LinkMass;
 use crate::tendon::SpatialTendon;
 use grasp_core::error::ProblemError;
-use nalgebra::{Isometry3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -92,9 +92,9 @@ pub struct Joint {
     /// Its kind.
     pub kind: JointKind,
     /// The joint frame in the parent link's frame (`<origin>`).
-    pub origin: Isometry3<f64>,
+    pub origin: Isometry3,
     /// The unit axis in the joint frame (normalised from `<axis xyz>`).
-    pub axis: Unit<Vector3<f64>>,
+    pub axis: Vector3,
     /// Parent link (index into [`Robot::links`]).
     pub parent: usize,
     /// Child link.
@@ -150,7 +150,7 @@ pub struct Robot {
     /// The acceleration of gravity in the root frame the file gives (MJCF `<option
     /// gravity>`, default `0 0 −9.81`): `None` for a URDF, which has none, and for a
     /// floating MJCF hand, whose orientation in the world the file does not fix.
-    pub gravity: Option<Vector3<f64>>,
+    pub gravity: Option<Vector3>,
     /// Per link: the joint whose child it is (`None` for the root).
     pub(crate) parent_joint: Vec<Option<usize>>,
     /// Links from the root outwards: every parent comes before its children.
@@ -166,7 +166,7 @@ pub struct Site {
     /// The link it is on.
     pub link: usize,
     /// Its frame in the link's frame; its z axis is a contact's default normal.
-    pub frame: Isometry3<f64>,
+    pub frame: Isometry3,
     /// Line of the element.
     pub line: u32,
 }
@@ -220,10 +220,10 @@ pub struct Actuator {
 #[derive(Clone, Debug)]
 pub struct Pose {
     /// Per link: its frame.
-    pub links: Vec<Isometry3<f64>>,
+    pub links: Vec<Isometry3>,
     /// Per joint: its frame (the parent link's frame moved by `<origin>`, before the
     /// joint's own motion).
-    pub joints: Vec<Isometry3<f64>>,
+    pub joints: Vec<Isometry3>,
 }
 
 fn robot_error(file: &str, element: impl Into<String>, message: impl Into<String>) -> ProblemError {
@@ -302,9 +302,9 @@ struct RawMimic {
 struct RawJoint {
     name: String,
     kind: &'static str,
-    origin: Isometry3<f64>,
+    origin: Isometry3,
     /// `<axis xyz>` (default `1 0 0`), not yet normalised.
-    axis: Vector3<f64>,
+    axis: Vector3,
     parent: String,
     child: String,
     limit: Limit,
@@ -372,7 +372,7 @@ fn origin(
     at: &str,
     e: roxmltree::Node,
     version: (u32, u32),
-) -> Result<Isometry3<f64>, ProblemError> {
+) -> Result<Isometry3, ProblemError> {
     let xyz = numbers::<3>(file, at, e, "xyz")?.unwrap_or_default();
     let rpy = numbers::<3>(file, at, e, "rpy")?;
     let quat = if version >= (1, 1) {
@@ -398,17 +398,14 @@ fn origin(
                     "<origin quat_xyzw=\"0 0 0 0\">: expected a nonzero quaternion",
                 ));
             }
-            UnitQuaternion::from_quaternion(Quaternion::new(w / big, x / big, y / big, z / big))
+            UnitQuaternion::new_normalize(w / big, x / big, y / big, z / big)
         }
         (rpy, None) => {
             let [r, p, y] = rpy.unwrap_or_default();
             UnitQuaternion::from_euler_angles(r, p, y)
         }
     };
-    Ok(Isometry3::from_parts(
-        Translation3::from(Vector3::from(xyz)),
-        rotation,
-    ))
+    Ok(Isometry3::from_parts(Vector3::from(xyz), rotation))
 }
 
 /// A `<joint>`'s parts, each checked; `at` names it in errors.
@@ -647,7 +644,7 @@ fn inertial_number(e: roxmltree::Node, tag: &str, attr: &str) -> Result<f64, Str
 
 /// An `<inertial>`'s mass (finite, ≥ 0) and centre of mass (`<origin xyz>`, default
 /// 0; `rpy` turns only the inertia tensor), or what is malformed.
-fn inertial_mass(e: roxmltree::Node) -> Result<(f64, Vector3<f64>), String> {
+fn inertial_mass(e: roxmltree::Node) -> Result<(f64, Vector3), String> {
     let mass = inertial_number(e, "mass", "value")?;
     if !(0.0..=grasp_core::problem::MAX_MAGNITUDE).contains(&mass) {
         return Err(format!("<mass value=\"{mass}\">: expected 0 to 1e12"));
@@ -784,9 +781,9 @@ impl Robot {
                 }
             };
             let axis = if kind == JointKind::Fixed {
-                Vector3::x_axis()
+                Vector3::x()
             } else {
-                Unit::try_new(j.axis, 0.0).ok_or_else(|| {
+                direction(j.axis).ok_or_else(|| {
                     robot_error(
                         file,
                         &at,
@@ -1029,11 +1026,7 @@ impl Robot {
     /// The frame called `name`: an MJCF site's, else a link's, as the link it is on and
     /// its placement in that link's frame (the identity for a link). `field` names the
     /// caller's argument in the error, which lists the nearest names.
-    pub fn named_frame(
-        &self,
-        name: &str,
-        field: &str,
-    ) -> Result<(usize, Isometry3<f64>), ProblemError> {
+    pub fn named_frame(&self, name: &str, field: &str) -> Result<(usize, Isometry3), ProblemError> {
         if let Some(s) = self.sites.iter().find(|s| s.name == name) {
             return Ok((s.link, s.frame));
         }
@@ -1114,18 +1107,31 @@ impl Robot {
             let motion = match j.kind {
                 JointKind::Fixed => Isometry3::identity(),
                 JointKind::Revolute | JointKind::Continuous => Isometry3::from_parts(
-                    Translation3::identity(),
+                    Vector3::zeros(),
                     UnitQuaternion::from_axis_angle(&j.axis, q[ji]),
                 ),
-                JointKind::Prismatic => Isometry3::from_parts(
-                    Translation3::from(j.axis.into_inner() * q[ji]),
-                    UnitQuaternion::identity(),
-                ),
+                JointKind::Prismatic => {
+                    Isometry3::from_parts(j.axis * q[ji], UnitQuaternion::identity())
+                }
             };
             joints[ji] = frame;
             links[l] = frame * motion;
         }
         Pose { links, joints }
+    }
+}
+
+/// The unit vector along `v`; `None` for the zero vector. Components too large to
+/// square are scaled first.
+pub(crate) fn direction(v: Vector3) -> Option<Vector3> {
+    let n = v.norm();
+    if n == 0.0 {
+        None
+    } else if n.is_finite() {
+        Some(v / n)
+    } else {
+        let big = v.x.abs().max(v.y.abs()).max(v.z.abs());
+        Some((v / big).normalize())
     }
 }
 
@@ -1234,13 +1240,10 @@ mod tests {
     fn rpy_is_fixed_axis_roll_pitch_yaw() {
         let (r, p, y) = (0.3, -0.7, 1.1);
         let q = UnitQuaternion::from_euler_angles(r, p, y);
-        let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), r);
-        let ry = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), p);
-        let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), y);
-        assert!(
-            (q.to_rotation_matrix().matrix() - (rz * ry * rx).to_rotation_matrix().matrix()).norm()
-                < 1e-15
-        );
+        let rx = UnitQuaternion::from_axis_angle(&Vector3::x(), r);
+        let ry = UnitQuaternion::from_axis_angle(&Vector3::y(), p);
+        let rz = UnitQuaternion::from_axis_angle(&Vector3::z(), y);
+        assert!(q.angle_to(&(rz * ry * rx)) < 1e-15);
     }
 
     #[test]

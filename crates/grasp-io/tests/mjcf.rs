@@ -182,7 +182,7 @@ fn masses_and_gravity_torques_match_mujoco() {
         let robot = Robot::load(&dir.join(file)).unwrap();
         let gravity: [f64; 3] = serde_json::from_value(hand["gravity"].clone()).unwrap();
         let g = robot.gravity.expect("a fixed hand's file fixes gravity");
-        assert_eq!(g.as_slice(), &gravity, "{file}: <option gravity>");
+        assert_eq!(g.to_array(), gravity, "{file}: <option gravity>");
         // Each body's mass (the part gravity loads) and centre, as MuJoCo compiles them.
         let bodies = hand["bodies"].as_object().unwrap();
         let heaviest = bodies
@@ -195,7 +195,7 @@ fn masses_and_gravity_torques_match_mujoco() {
             let loads = b["mass"].as_f64().unwrap() * (1.0 - b["gravcomp"].as_f64().unwrap());
             let com: [f64; 3] = serde_json::from_value(b["com"].clone()).unwrap();
             let (mass, at) = match &robot.masses[link] {
-                LinkMass::None => (0.0, nalgebra::Vector3::zeros()),
+                LinkMass::None => (0.0, grasp_io::frame::Vector3::zeros()),
                 LinkMass::Known { mass, com } => (*mass, *com),
                 LinkMass::Unknown(why) => panic!("{file}: {name}: {why}"),
             };
@@ -203,7 +203,7 @@ fn masses_and_gravity_torques_match_mujoco() {
             worst_m = worst_m.max(err);
             assert!(err <= 1e-12, "{file}: {name} weighs {mass}, MuJoCo {loads}");
             if loads > 0.0 {
-                let off = (at - nalgebra::Vector3::from(com)).norm();
+                let off = (at - grasp_io::frame::Vector3::from(com)).norm();
                 worst_m = worst_m.max(off / 0.1);
                 assert!(
                     off <= 1e-12,
@@ -581,7 +581,7 @@ fn a_free_object_in_the_scene_is_not_the_hand() {
         let j = scene.link(name).unwrap();
         let d = a.links[i].inverse() * b.links[j];
         assert!(
-            d.translation.vector.norm() < 1e-15 && d.rotation.angle() < 1e-15,
+            d.translation.norm() < 1e-15 && d.rotation.angle() < 1e-15,
             "{name} moved"
         );
     }

@@ -25,8 +25,8 @@ pub(crate) fn frame_error(robot: &Robot, case: &serde_json::Value, model: &str) 
         let x = pose.links[link] * offset;
         let r = x.rotation.to_rotation_matrix();
         let got = (0..3)
-            .map(|i| x.translation.vector[i])
-            .chain((0..9).map(|e| r[(e / 3, e % 3)]));
+            .map(|i| x.translation[i])
+            .chain((0..9).map(|e| r[e / 3][e % 3]));
         let err = got
             .zip(&want)
             .fold(0.0f64, |a, (g, w)| a.max((g - w).abs()));
