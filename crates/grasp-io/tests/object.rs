@@ -13,25 +13,18 @@ fn repo(p: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(p)
 }
 
-/// A fixed-seed generator of uniform numbers in [-1, 1) (xorshift64*).
-struct Rng(u64);
+mod rng;
+use rng::Rng;
 
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let bits = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
-        bits as f64 / (1u64 << 52) as f64 - 1.0
-    }
-    fn vec3(&mut self, scale: f64) -> [f64; 3] {
-        [self.next(), self.next(), self.next()].map(|x| scale * x)
-    }
-    fn quaternion(&mut self) -> [f64; 4] {
-        let q = [self.next(), self.next(), self.next(), self.next()];
-        let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-        q.map(|x| x / n)
-    }
+fn vec3(rng: &mut Rng, scale: f64) -> [f64; 3] {
+    [rng.next(), rng.next(), rng.next()].map(|x| scale * x)
+}
+
+/// A random unit quaternion `[w, x, y, z]`.
+fn random_quaternion(rng: &mut Rng) -> [f64; 4] {
+    let q = [rng.next(), rng.next(), rng.next(), rng.next()];
+    let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    q.map(|x| x / n)
 }
 
 fn allegro() -> (HandFile, Robot) {
@@ -84,21 +77,18 @@ fn the_weight_joins_the_wrench() {
     let mut worst = 0.0f64;
     for case in 0..200 {
         let mass = 0.01 + 2.0 * (1.0 + rng.next());
-        let center_of_mass = rng.vec3(0.05);
+        let center_of_mass = vec3(&mut rng, 0.05);
         // Any direction; from a hundredth of Earth's to ten times.
-        let g = rng
-            .vec3(1.0)
-            .map(|x| x * 9.81 * 10f64.powf(1.5 * rng.next() - 0.5));
-        let quaternion = rng.quaternion();
-        let besides = rng
-            .vec3(0.5)
+        let g = vec3(&mut rng, 1.0).map(|x| x * 9.81 * 10f64.powf(1.5 * rng.next() - 0.5));
+        let quaternion = random_quaternion(&mut rng);
+        let besides = vec3(&mut rng, 0.5)
             .into_iter()
-            .chain(rng.vec3(0.02))
+            .chain(vec3(&mut rng, 0.02))
             .collect::<Vec<_>>();
         let mut file = template.clone();
         file.hand.gravity = Some(serde_json::json!(g));
         file.object_pose = Some(ObjectPose {
-            position: rng.vec3(0.1),
+            position: vec3(&mut rng, 0.1),
             quaternion,
         });
         file.object = Some(HeldObject {
@@ -179,10 +169,10 @@ fn each_pose_weighs_the_object_its_own_way() {
     let grasps = template.grasps(&robot).unwrap();
     let mut rng = Rng(7);
     for case in 0..50 {
-        let gravity = rng.vec3(9.81);
+        let gravity = vec3(&mut rng, 9.81);
         let object_pose = ObjectPose {
-            position: rng.vec3(0.1),
-            quaternion: rng.quaternion(),
+            position: vec3(&mut rng, 0.1),
+            quaternion: random_quaternion(&mut rng),
         };
         let pose = GraspPose {
             object_pose: Some(object_pose),

@@ -13,24 +13,16 @@ fn repo(p: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(p)
 }
 
-/// A fixed-seed generator of uniform numbers in [-1, 1) (xorshift64*).
-struct Rng(u64);
+mod rng;
+use rng::Rng;
 
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let bits = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
-        bits as f64 / (1u64 << 52) as f64 - 1.0
-    }
-    fn unit(&mut self) -> [f64; 3] {
-        loop {
-            let v = [self.next(), self.next(), self.next()];
-            let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-            if n > 0.1 && n <= 1.0 {
-                return v.map(|x| x / n);
-            }
+/// A random unit vector.
+fn unit(rng: &mut Rng) -> [f64; 3] {
+    loop {
+        let v = [rng.next(), rng.next(), rng.next()];
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        if n > 0.1 && n <= 1.0 {
+            return v.map(|x| x / n);
         }
     }
 }
@@ -75,7 +67,7 @@ fn same_both_ways(fixture: &str, points: bool, seed: u64, cases: usize) {
                     ContactFrame::Object
                 };
             }
-            let u = rng.unit();
+            let u = unit(&mut rng);
             c.normal = Some(u);
             normals[i] = Some(u);
         }
@@ -89,7 +81,7 @@ fn same_both_ways(fixture: &str, points: bool, seed: u64, cases: usize) {
         };
         file.object_pose = Some(object_pose);
         // Every third grasp under its own gravity (the hand turned another way).
-        let gravity = (case % 3 == 0).then(|| rng.unit().map(|x| 9.81 * x));
+        let gravity = (case % 3 == 0).then(|| unit(&mut rng).map(|x| 9.81 * x));
         if let Some(g) = gravity {
             file.hand.gravity = Some(serde_json::json!(g));
         }
