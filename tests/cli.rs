@@ -50,6 +50,23 @@ fn solves_the_paper_example_as_text_and_json() {
         "{text}"
     );
     assert!(!text.contains("NaN"));
+    // Each contact's force on the object: the rows of G times its components (the
+    // first finger pushes along +z, the second along −z; together −1, −1 along x, y).
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("forces on the object (object frame)"))
+        .skip(1)
+        .take(2)
+        .map(|l| l.split_whitespace().collect())
+        .collect();
+    assert_eq!(
+        rows,
+        [
+            ["0", "-0.5", "-0.5", "3.25"],
+            ["1", "-0.5", "-0.5", "-3.25"]
+        ],
+        "{text}"
+    );
 
     let out = run(&["solve", &fixture("paper-example.json"), "--format", "json"]);
     assert_eq!(out.status.code(), Some(0));
@@ -59,6 +76,7 @@ fn solves_the_paper_example_as_text_and_json() {
         "objective",
         "torque",
         "contact_forces",
+        "object_forces",
         "iterations",
         "residuals",
         "diagnostics",

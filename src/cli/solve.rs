@@ -424,6 +424,26 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
             cells.join(" ")
         );
     }
+    let forces =
+        grasp_torque::model::object_forces(&model.grasp_matrix, &model.contacts, &s.contact_forces);
+    let fmax = forces.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+    let _ = writeln!(
+        o,
+        "
+forces on the object (object frame) {:>11} {:>11} {:>11}",
+        "Fx", "Fy", "Fz"
+    );
+    for (i, f) in forces.iter().enumerate() {
+        let cells: Vec<String> = f
+            .iter()
+            .map(|&x| format!("{:>11}", component(x, s.diagnostics.check_tolerance * fmax)))
+            .collect();
+        let _ = writeln!(
+            o,
+            "  {i:<3}                               {}",
+            cells.join(" ")
+        );
+    }
     let d = &s.diagnostics;
     let share = |x: f64| {
         if x < 1e-3 {
