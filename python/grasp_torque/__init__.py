@@ -390,10 +390,16 @@ def _solver_from_state(problem: Problem, settings: dict) -> Solver:
     return Solver(problem, **settings)
 
 
-BatchResult = namedtuple("BatchResult", ["torque", "objective", "wrench_residual", "status", "errors"])
+BatchResult = namedtuple(
+    "BatchResult",
+    ["torque", "objective", "wrench_residual", "status", "errors", "contact_forces"],
+    defaults=(None,),
+)
 BatchResult.__doc__ = """Arrays of a batch: ``torque[B,(K,)m]``, ``objective[B,(K)]``,
 ``wrench_residual[B,(K)]`` (``‖G f − w‖∞``), ``status[B,(K)]`` (int8 codes, see
-``STATUS_CODES``), and ``errors``: ``{(grasp, wrench): message}`` for invalid items."""
+``STATUS_CODES``), ``errors``: ``{(grasp, wrench): message}`` for invalid items, and
+with ``contact_forces=True`` the forces ``f[B,(K,)n]`` in G's column order (each
+contact's components in its frame; NaN without an answer), else None."""
 
 
 def _out(name: str, given, shape, dtype):
@@ -438,6 +444,13 @@ def _flat(outs, B, K, m):
     )
 
 
+def _forces(given, lead, n):
+    """The contact forces' output: None unless asked for (True, or an array)."""
+    if given is None or given is False:
+        return None
+    return _out("contact_forces", None if given is True else given, lead + (n,), np.float64)
+
+
 def _threads(threads) -> int:
     if threads is None:
         return _native.default_threads()
@@ -475,6 +488,7 @@ def solve_batch(
     objective: Optional[np.ndarray] = None,
     wrench_residual: Optional[np.ndarray] = None,
     status: Optional[np.ndarray] = None,
+    contact_forces=False,
 ) -> BatchResult:
     """Solves B grasps, each for one or K wrenches, in parallel, with the GIL released.
 
@@ -492,9 +506,11 @@ def solve_batch(
 
     As in ``mujoco.rollout``, the outputs ``torque``, ``objective``,
     ``wrench_residual`` (float64) and ``status`` (int8) may be passed preallocated
-    (C-contiguous, of the output shape) and are then filled in place. An invalid or
-    infeasible item never raises: it gets its status code; only arguments that make
-    the whole batch impossible (shapes, contacts, options) raise ``ValueError``.
+    (C-contiguous, of the output shape) and are then filled in place.
+    ``contact_forces=True`` (or such an array, ``[B,(K,)n]``) also returns the contact
+    forces f. An invalid or infeasible item never raises: it gets its status code; only
+    arguments that make the whole batch impossible (shapes, contacts, options) raise
+    ``ValueError``.
     """
     G, JT, W = _real("G", G), _real("JT", JT), _real("W", W)
     if G.ndim != 3:
@@ -523,7 +539,9 @@ def solve_batch(
         if passive_torque.ndim == 1:
             passive_torque = np.broadcast_to(passive_torque, (B,) + passive_torque.shape)
         passive_torque = np.ascontiguousarray(passive_torque)
-    outs = _outputs((B,) if single else (B, K), m, torque, objective, wrench_residual, status)
+    lead = (B,) if single else (B, K)
+    outs = _outputs(lead, m, torque, objective, wrench_residual, status)
+    F = _forces(contact_forces, lead, G.shape[2])
     spec = {
         "contacts": _contacts(contacts),
         "torque_weights": torque_weights,
@@ -546,15 +564,19 @@ def solve_batch(
         threads,
         bool(warm_start),
         *_flat(outs, B, K, m),
+        None if F is None else F.reshape((B, K, G.shape[2])),
     )
-    return BatchResult(*outs, _errors(errors, single))
+    return BatchResult(*outs, _errors(errors, single), F)
 
 
 HandBatchResult = namedtuple(
-    "HandBatchResult", ["torque", "objective", "wrench_residual", "status", "errors", "names"]
+    "HandBatchResult",
+    ["torque", "objective", "wrench_residual", "status", "errors", "names", "contact_forces"],
+    defaults=(None,),
 )
 HandBatchResult.__doc__ = """``BatchResult`` with ``names``: the joints (or, for an MJCF hand with
-actuators, the actuators) of ``torque``'s last axis, in order."""
+actuators, the actuators) of ``torque``'s last axis, in order; ``contact_forces``
+(with ``contact_forces=True``) in the contacts' order."""
 
 
 HandArrays = namedtuple(
@@ -761,6 +783,7 @@ class Hand:
         objective: Optional[np.ndarray] = None,
         wrench_residual: Optional[np.ndarray] = None,
         status: Optional[np.ndarray] = None,
+        contact_forces=False,
     ) -> HandBatchResult:
         """Solves B grasps of this hand, each for one or K wrenches, in parallel.
 
@@ -784,7 +807,8 @@ class Hand:
         default its origin) also weighs the object under that gravity, in each grasp's
         object pose: ``W`` is then what the contacts apply besides (``None``: nothing
         besides). The solver keywords,
-        ``threads``, ``warm_start`` and the preallocated outputs are ``solve_batch``'s.
+        ``threads``, ``warm_start``, the preallocated outputs and ``contact_forces`` are
+        ``solve_batch``'s.
         A grasp whose input is rejected (a NaN joint position, a normal that is not
         unit) is an ``invalid`` item with its message in ``errors``; only arguments that
         make the whole batch impossible raise ``ValueError``.
@@ -811,9 +835,11 @@ class Hand:
         )
         spec["gravity"], rows = _gravity(gravity, B)
         spec_json, settings_json = _dumps(spec), _dumps(settings)
-        names, _ = self._native.layout(spec_json, settings_json)
+        names, _, n = self._native.layout(spec_json, settings_json)
         m = len(names)
-        outs = _outputs((B,) if single else (B, K), m, torque, objective, wrench_residual, status)
+        lead = (B,) if single else (B, K)
+        outs = _outputs(lead, m, torque, objective, wrench_residual, status)
+        F = _forces(contact_forces, lead, n)
         threads = _threads(threads)
         errors = self._native.solve_batch(
             q,
@@ -827,8 +853,9 @@ class Hand:
             threads,
             bool(warm_start),
             *_flat(outs, B, K, m),
+            None if F is None else F.reshape((B, K, n)),
         )
-        return HandBatchResult(*outs, _errors(errors, single), list(names))
+        return HandBatchResult(*outs, _errors(errors, single), list(names), F)
 
 
 def synthetic_grasps(

@@ -638,8 +638,11 @@ struct Outputs {
     objective: *mut f64,
     residual: *mut f64,
     status: *mut i8,
+    /// `[B, K, n]`, when the caller asked for the contact forces.
+    forces: Option<*mut f64>,
     wrenches: usize,
     joints: usize,
+    force_dim: usize,
 }
 
 // SAFETY: each (grasp, wrench) pair is emitted exactly once, and writes only its own
@@ -647,21 +650,28 @@ struct Outputs {
 unsafe impl Sync for Outputs {}
 
 impl Outputs {
-    /// The four output arrays for `[B, K, m]`, checked (shape, C order).
+    /// The output arrays for `[B, K, m]` (and `[B, K, n]` contact forces), checked
+    /// (shape, C order).
     fn new(
-        [b, k, m]: [usize; 3],
+        [b, k, m, n]: [usize; 4],
         torque: &mut PyReadwriteArrayDyn<'_, f64>,
         objective: &mut PyReadwriteArrayDyn<'_, f64>,
         wrench_residual: &mut PyReadwriteArrayDyn<'_, f64>,
         status: &mut PyReadwriteArrayDyn<'_, i8>,
+        forces: Option<&mut PyReadwriteArrayDyn<'_, f64>>,
     ) -> PyResult<Self> {
         Ok(Self {
             torque: contiguous_out("torque", torque, &[b, k, m])?.as_mut_ptr(),
             objective: contiguous_out("objective", objective, &[b, k])?.as_mut_ptr(),
             residual: contiguous_out("wrench_residual", wrench_residual, &[b, k])?.as_mut_ptr(),
             status: contiguous_out("status", status, &[b, k])?.as_mut_ptr(),
+            forces: match forces {
+                Some(f) => Some(contiguous_out("contact_forces", f, &[b, k, n])?.as_mut_ptr()),
+                None => None,
+            },
             wrenches: k,
             joints: m,
+            force_dim: n,
         })
     }
 
@@ -672,7 +682,7 @@ impl Outputs {
                 status_code(s.status),
                 s.objective,
                 s.diagnostics.wrench_residual,
-                Some(&s.torque),
+                Some(s),
             ),
             Ok(s) => (status_code(s.status), f64::NAN, f64::NAN, None),
             Err(_) => (INVALID, f64::NAN, f64::NAN, None),
@@ -685,8 +695,16 @@ impl Outputs {
             *self.residual.add(i) = residual;
             let row = std::slice::from_raw_parts_mut(self.torque.add(i * self.joints), self.joints);
             match torque {
-                Some(t) => row.copy_from_slice(t),
+                Some(s) => row.copy_from_slice(&s.torque),
                 None => row.fill(f64::NAN),
+            }
+            // Likewise the row i·n .. (i+1)·n of B·K·n.
+            if let Some(f) = self.forces {
+                let row = std::slice::from_raw_parts_mut(f.add(i * self.force_dim), self.force_dim);
+                match torque.filter(|s| s.contact_forces.len() == self.force_dim) {
+                    Some(s) => row.copy_from_slice(&s.contact_forces),
+                    None => row.fill(f64::NAN),
+                }
             }
         }
     }
@@ -741,6 +759,7 @@ fn solve_batch(
     mut objective: PyReadwriteArrayDyn<'_, f64>,
     mut wrench_residual: PyReadwriteArrayDyn<'_, f64>,
     mut status: PyReadwriteArrayDyn<'_, i8>,
+    mut forces: Option<PyReadwriteArrayDyn<'_, f64>>,
 ) -> PyResult<Vec<(usize, usize, String)>> {
     let spec: BatchSpec = from_keywords(spec_json)?;
     let settings: Settings = from_keywords(settings_json)?;
@@ -832,11 +851,12 @@ fn solve_batch(
     // One torque per actuator with a transmission, else per joint.
     let m = template.actuated();
     let out = Outputs::new(
-        [b, k, m],
+        [b, k, m, n],
         &mut torque,
         &mut objective,
         &mut wrench_residual,
         &mut status,
+        forces.as_mut(),
     )?;
     let source = Arrays {
         g: gv,
@@ -996,15 +1016,17 @@ impl Hand {
         self.robot.warnings.clone()
     }
 
-    /// What a batch with these contacts solves for: `(names, actuated)`, the names of
-    /// the problem's joints (or actuators, `actuated` true) in output order.
-    fn layout(&self, spec_json: &str, settings_json: &str) -> PyResult<(Vec<String>, bool)> {
+    /// What a batch with these contacts solves for: `(names, actuated, n)`, the names
+    /// of the problem's joints (or actuators, `actuated` true) in output order, and the
+    /// number of contact force components.
+    fn layout(&self, spec_json: &str, settings_json: &str) -> PyResult<(Vec<String>, bool, usize)> {
         let settings: Settings = from_keywords(settings_json)?;
         let (grasps, _) = self.grasps(from_keywords(spec_json)?, &settings)?;
         let t = grasps.template();
+        let n = t.contacts.iter().map(|c| c.dim()).sum();
         Ok(match &t.transmission {
-            Some(tr) => (tr.actuator_names.clone(), true),
-            None => (t.joint_names.clone(), false),
+            Some(tr) => (tr.actuator_names.clone(), true, n),
+            None => (t.joint_names.clone(), false, n),
         })
     }
 
@@ -1030,6 +1052,7 @@ impl Hand {
         mut objective: PyReadwriteArrayDyn<'_, f64>,
         mut wrench_residual: PyReadwriteArrayDyn<'_, f64>,
         mut status: PyReadwriteArrayDyn<'_, i8>,
+        mut forces: Option<PyReadwriteArrayDyn<'_, f64>>,
     ) -> PyResult<Vec<(usize, usize, String)>> {
         let settings: Settings = from_keywords(settings_json)?;
         let (grasps, config) = self.grasps(from_keywords(spec_json)?, &settings)?;
@@ -1040,13 +1063,15 @@ impl Hand {
         if threads == 0 {
             return Err(invalid("threads: expected at least 1 worker thread, got 0"));
         }
-        let m = source.grasps.template().actuated();
+        let t = source.grasps.template();
+        let (m, n) = (t.actuated(), t.contacts.iter().map(|c| c.dim()).sum());
         let out = Outputs::new(
-            [b, k, m],
+            [b, k, m, n],
             &mut torque,
             &mut objective,
             &mut wrench_residual,
             &mut status,
+            forces.as_mut(),
         )?;
         let options = BatchOptions {
             threads: Some(threads),

@@ -52,6 +52,44 @@ def test_batch_matches_one_by_one(wrenches):
     assert optimal > len(alone) * K // 2
 
 
+@pytest.mark.parametrize("wrenches", [0, 3])
+def test_contact_forces_on_request(wrenches):
+    G, JT, W = gt.synthetic_grasps(60, wrenches=wrenches, seed=8)
+    W[5] = np.nan  # an invalid item: its forces are NaN
+    out = gt.solve_batch(G, JT, W, PCWF, threads=2, contact_forces=True)
+    assert gt.solve_batch(G, JT, W, PCWF, threads=2).contact_forces is None
+    B, n = G.shape[0], G.shape[2]
+    K = 1 if W.ndim == 2 else W.shape[1]
+    F = out.contact_forces.reshape(B, K, n)
+    Ws, T = W.reshape(B, K, 6), out.torque.reshape(B, K, -1)
+    status = out.status.reshape(B, K)
+    held = 0
+    for b in range(B):
+        for k in range(K):
+            if status[b, k] != 0:
+                assert np.isnan(F[b, k]).all()
+                continue
+            held += 1
+            f = F[b, k]
+            # The statics of the answer: G f = w, Jᵀ f = τ.
+            scale = np.abs(f).max()
+            np.testing.assert_allclose(G[b] @ f, Ws[b, k], rtol=0, atol=1e-9 * scale)
+            np.testing.assert_allclose(JT[b] @ f, T[b, k], rtol=0, atol=1e-9 * scale * np.abs(JT[b]).max())
+    assert held > B // 2
+    # One wrench per grasp: the forces of a one-by-one solve, bit for bit.
+    if K == 1:
+        for b in (0, 1, 2):
+            r = gt.Solver(gt.Problem.from_arrays(G[b], JT[b], PCWF, W[b])).solve()
+            if r.status == "optimal":
+                np.testing.assert_array_equal(F[b, 0], r.contact_forces)
+    # Preallocated, filled in place; a wrong shape is named.
+    F2 = np.empty(out.contact_forces.shape)
+    again = gt.solve_batch(G, JT, W, PCWF, threads=1, contact_forces=F2)
+    assert again.contact_forces is F2
+    with pytest.raises(ValueError, match="contact_forces: expected .*shape"):
+        gt.solve_batch(G, JT, W, PCWF, contact_forces=np.empty((B, n + 1)))
+
+
 def test_soft_fingers_and_options_match_one_by_one():
     G, JT, W = gt.synthetic_grasps(40, fingers=4, seed=5)
     # Soft fingers: four columns per contact, the fourth the torsional moment.

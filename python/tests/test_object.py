@@ -81,6 +81,17 @@ def test_the_object_weighs_on_every_grasp():
         r = gt.Solver(gt.Problem.from_dict(d)).solve()
         assert gt.STATUS_CODES[weighed.status[b]] == r.status
         np.testing.assert_array_equal(weighed.torque[b], r.torque)
+    # The contact forces carry the weight: G f = W + the weight's wrench.
+    forces = hand.solve_batch(
+        Q, extra, contacts, object_pose=pose, gravity=g, object_mass=mass,
+        center_of_mass=com, contact_forces=True,
+    )
+    np.testing.assert_array_equal(forces.torque, more.torque)
+    for b in np.flatnonzero(forces.status == 0):
+        f = forces.contact_forces[b]
+        np.testing.assert_allclose(
+            a.G[b] @ f, extra[b] + a.object_wrench[b], rtol=0, atol=1e-9 * np.abs(f).max()
+        )
     # Without object_mass, no object_wrench.
     assert hand.arrays(Q, contacts, object_pose=pose, gravity=g).object_wrench is None
 
