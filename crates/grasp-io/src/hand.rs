@@ -16,7 +16,7 @@ use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
 use grasp_core::matrix::Matrix;
 use grasp_core::problem::{
-    contact_count, flush_subnormal, GraspProblem, MAX_JOINTS, MAX_MAGNITUDE,
+    contact_count, flush_subnormal, in_domain, GraspProblem, MAX_JOINTS, MAX_MAGNITUDE,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -734,10 +734,10 @@ impl HandFile {
 /// `object`, checked: a mass in the input domain, a finite centre, and a gravity to
 /// weigh it.
 fn held_object(o: HeldObject, weighed: bool) -> Result<HeldObject, ProblemError> {
-    if !(0.0..=MAX_MAGNITUDE).contains(&o.mass) {
+    if !(o.mass >= 0.0 && in_domain(o.mass)) {
         return Err(ProblemError::invalid(
             "object.mass",
-            format!("a mass from 0 to {MAX_MAGNITUDE:e}"),
+            format!("a mass from 0 to {MAX_MAGNITUDE:e} (0, or not subnormal)"),
             o.mass,
         ));
     }
@@ -749,10 +749,7 @@ fn held_object(o: HeldObject, weighed: bool) -> Result<HeldObject, ProblemError>
             o.mass,
         ));
     }
-    Ok(HeldObject {
-        mass: flush_subnormal(o.mass),
-        center_of_mass: o.center_of_mass.map(flush_subnormal),
-    })
+    Ok(o)
 }
 
 /// A link whose weight gravity needs but the file does not give.

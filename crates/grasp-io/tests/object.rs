@@ -220,7 +220,7 @@ fn a_bad_object_is_an_error_naming_the_field() {
         "{e}"
     );
     let with_gravity = |f: &mut HandFile| f.hand.gravity = Some(serde_json::json!([0, 0, -9.81]));
-    for mass in [-0.1, 2e12, f64::NAN, f64::INFINITY] {
+    for mass in [-0.1, 2e12, f64::NAN, f64::INFINITY, 1e-310] {
         let e = err(&|f| {
             with_gravity(f);
             f.object = object(mass, [0.0; 3]);
