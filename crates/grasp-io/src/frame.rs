@@ -19,46 +19,55 @@ pub struct Vector3 {
 
 impl Vector3 {
     /// `[x, y, z]`.
+    #[inline]
     pub const fn new(x: f64, y: f64, z: f64) -> Self {
         Self { x, y, z }
     }
 
     /// The origin.
+    #[inline]
     pub const fn zeros() -> Self {
         Self::new(0.0, 0.0, 0.0)
     }
 
     /// The unit x axis.
+    #[inline]
     pub const fn x() -> Self {
         Self::new(1.0, 0.0, 0.0)
     }
 
     /// The unit y axis.
+    #[inline]
     pub const fn y() -> Self {
         Self::new(0.0, 1.0, 0.0)
     }
 
     /// The unit z axis.
+    #[inline]
     pub const fn z() -> Self {
         Self::new(0.0, 0.0, 1.0)
     }
 
     /// The components as an array.
+    #[inline]
     pub const fn to_array(self) -> [f64; 3] {
         [self.x, self.y, self.z]
     }
 
     /// `f` of each component.
+    #[inline]
     pub fn map(self, f: impl Fn(f64) -> f64) -> Self {
         Self::new(f(self.x), f(self.y), f(self.z))
     }
 
     /// The scalar product.
+    #[inline]
     pub fn dot(&self, o: &Self) -> f64 {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
 
     /// The vector product.
+    #[inline]
     pub fn cross(&self, o: &Self) -> Self {
         Self::new(
             self.y * o.z - self.z * o.y,
@@ -68,28 +77,33 @@ impl Vector3 {
     }
 
     /// The squared length.
+    #[inline]
     pub fn norm_squared(&self) -> f64 {
         self.dot(self)
     }
 
     /// The length.
+    #[inline]
     pub fn norm(&self) -> f64 {
         self.norm_squared().sqrt()
     }
 
     /// The vector divided by its length (NaN for the zero vector).
+    #[inline]
     pub fn normalize(&self) -> Self {
         *self / self.norm()
     }
 }
 
 impl From<[f64; 3]> for Vector3 {
+    #[inline]
     fn from([x, y, z]: [f64; 3]) -> Self {
         Self::new(x, y, z)
     }
 }
 
 impl From<Vector3> for [f64; 3] {
+    #[inline]
     fn from(v: Vector3) -> Self {
         v.to_array()
     }
@@ -97,6 +111,7 @@ impl From<Vector3> for [f64; 3] {
 
 impl Index<usize> for Vector3 {
     type Output = f64;
+    #[inline]
     fn index(&self, i: usize) -> &f64 {
         match i {
             0 => &self.x,
@@ -108,6 +123,7 @@ impl Index<usize> for Vector3 {
 }
 
 impl IndexMut<usize> for Vector3 {
+    #[inline]
     fn index_mut(&mut self, i: usize) -> &mut f64 {
         match i {
             0 => &mut self.x,
@@ -120,6 +136,7 @@ impl IndexMut<usize> for Vector3 {
 
 impl Add for Vector3 {
     type Output = Self;
+    #[inline]
     fn add(self, o: Self) -> Self {
         Self::new(self.x + o.x, self.y + o.y, self.z + o.z)
     }
@@ -127,24 +144,28 @@ impl Add for Vector3 {
 
 impl Sub for Vector3 {
     type Output = Self;
+    #[inline]
     fn sub(self, o: Self) -> Self {
         Self::new(self.x - o.x, self.y - o.y, self.z - o.z)
     }
 }
 
 impl AddAssign for Vector3 {
+    #[inline]
     fn add_assign(&mut self, o: Self) {
         *self = *self + o;
     }
 }
 
 impl SubAssign for Vector3 {
+    #[inline]
     fn sub_assign(&mut self, o: Self) {
         *self = *self - o;
     }
 }
 
 impl DivAssign<f64> for Vector3 {
+    #[inline]
     fn div_assign(&mut self, s: f64) {
         *self = *self / s;
     }
@@ -152,6 +173,7 @@ impl DivAssign<f64> for Vector3 {
 
 impl Neg for Vector3 {
     type Output = Self;
+    #[inline]
     fn neg(self) -> Self {
         Self::new(-self.x, -self.y, -self.z)
     }
@@ -159,6 +181,7 @@ impl Neg for Vector3 {
 
 impl Mul<f64> for Vector3 {
     type Output = Self;
+    #[inline]
     fn mul(self, s: f64) -> Self {
         Self::new(self.x * s, self.y * s, self.z * s)
     }
@@ -166,6 +189,7 @@ impl Mul<f64> for Vector3 {
 
 impl Mul<Vector3> for f64 {
     type Output = Vector3;
+    #[inline]
     fn mul(self, v: Vector3) -> Vector3 {
         Vector3::new(self * v.x, self * v.y, self * v.z)
     }
@@ -173,6 +197,7 @@ impl Mul<Vector3> for f64 {
 
 impl Div<f64> for Vector3 {
     type Output = Self;
+    #[inline]
     fn div(self, s: f64) -> Self {
         Self::new(self.x / s, self.y / s, self.z / s)
     }
@@ -187,6 +212,7 @@ pub struct UnitQuaternion {
 
 impl UnitQuaternion {
     /// No rotation.
+    #[inline]
     pub const fn identity() -> Self {
         Self {
             w: 1.0,
@@ -195,6 +221,7 @@ impl UnitQuaternion {
     }
 
     /// `[w, x, y, z]` divided by its length (its rotation; NaN for zero).
+    #[inline]
     pub fn new_normalize(w: f64, x: f64, y: f64, z: f64) -> Self {
         // (x² + z²) + (y² + w²): nalgebra's four-term sum.
         let n = ((x * x + z * z) + (y * y + w * w)).sqrt();
@@ -205,17 +232,20 @@ impl UnitQuaternion {
     }
 
     /// `[w, x, y, z]`.
+    #[inline]
     pub fn coords(&self) -> [f64; 4] {
         [self.w, self.v.x, self.v.y, self.v.z]
     }
 
     /// The rotation by `angle` (radians) about the unit `axis`.
+    #[inline]
     pub fn from_axis_angle(axis: &Vector3, angle: f64) -> Self {
         let (s, c) = (angle / 2.0).sin_cos();
         Self { w: c, v: *axis * s }
     }
 
     /// Roll, pitch and yaw about the fixed x, y and z axes: `Rz(yaw) Ry(pitch) Rx(roll)`.
+    #[inline]
     pub fn from_euler_angles(roll: f64, pitch: f64, yaw: f64) -> Self {
         let (sr, cr) = (roll * 0.5).sin_cos();
         let (sp, cp) = (pitch * 0.5).sin_cos();
@@ -232,6 +262,7 @@ impl UnitQuaternion {
 
     /// The shortest-arc rotation taking the direction of `a` to that of `b`: `None`
     /// when they are opposite (the axis is then undefined) or either is zero.
+    #[inline]
     pub fn rotation_between(a: &Vector3, b: &Vector3) -> Option<Self> {
         let (na, nb) = (a.norm(), b.norm());
         if na == 0.0 || nb == 0.0 {
@@ -259,6 +290,7 @@ impl UnitQuaternion {
 
     /// The rotation of a rotation matrix (rows of `m`), by the larger of the trace and
     /// the diagonal entries (Shepperd's choice, for accuracy).
+    #[inline]
     pub fn from_rotation_matrix(m: &[[f64; 3]; 3]) -> Self {
         let tr = m[0][0] + m[1][1] + m[2][2];
         let [w, x, y, z] = if tr > 0.0 {
@@ -301,6 +333,7 @@ impl UnitQuaternion {
     }
 
     /// The opposite rotation.
+    #[inline]
     pub fn inverse(&self) -> Self {
         Self {
             w: self.w,
@@ -309,6 +342,7 @@ impl UnitQuaternion {
     }
 
     /// The rotation matrix, by rows (its columns are the rotated x, y and z axes).
+    #[inline]
     pub fn to_rotation_matrix(&self) -> [[f64; 3]; 3] {
         let (i, j, k, w) = (self.v.x, self.v.y, self.v.z, self.w);
         let (ww, ii, jj, kk) = (w * w, i * i, j * j, k * k);
@@ -322,16 +356,19 @@ impl UnitQuaternion {
     }
 
     /// `v` turned by the inverse rotation.
+    #[inline]
     pub fn inverse_transform_vector(&self, v: &Vector3) -> Vector3 {
         self.inverse() * *v
     }
 
     /// The rotation's angle, in [0, π] (by `atan2`, accurate for small angles too).
+    #[inline]
     pub fn angle(&self) -> f64 {
         2.0 * self.v.norm().atan2(self.w.abs())
     }
 
     /// The angle of the rotation taking `self` to `other`, in [0, π].
+    #[inline]
     pub fn angle_to(&self, other: &Self) -> f64 {
         (self.inverse() * *other).angle()
     }
@@ -340,6 +377,7 @@ impl UnitQuaternion {
 impl Mul for UnitQuaternion {
     type Output = Self;
     /// The rotation `rhs`, then `self`.
+    #[inline]
     fn mul(self, r: Self) -> Self {
         let (a, b) = (self, r);
         Self {
@@ -356,6 +394,7 @@ impl Mul for UnitQuaternion {
 impl Mul<Vector3> for UnitQuaternion {
     type Output = Vector3;
     /// `p` turned: `p + w t + v × t` with `t = 2 v × p`.
+    #[inline]
     fn mul(self, p: Vector3) -> Vector3 {
         let t = self.v.cross(&p) * 2.0;
         t * self.w + self.v.cross(&t) + p
@@ -373,6 +412,7 @@ pub struct Isometry3 {
 
 impl Isometry3 {
     /// The frame itself.
+    #[inline]
     pub const fn identity() -> Self {
         Self {
             rotation: UnitQuaternion::identity(),
@@ -381,6 +421,7 @@ impl Isometry3 {
     }
 
     /// The frame with origin `translation` and orientation `rotation`.
+    #[inline]
     pub const fn from_parts(translation: Vector3, rotation: UnitQuaternion) -> Self {
         Self {
             rotation,
@@ -389,16 +430,19 @@ impl Isometry3 {
     }
 
     /// The point `p`, given in this frame, in the outer one.
+    #[inline]
     pub fn transform_point(&self, p: &Vector3) -> Vector3 {
         self.rotation * *p + self.translation
     }
 
     /// The point `p`, given in the outer frame, in this one.
+    #[inline]
     pub fn inverse_transform_point(&self, p: &Vector3) -> Vector3 {
         self.rotation.inverse() * (*p - self.translation)
     }
 
     /// The outer frame seen from this one.
+    #[inline]
     pub fn inverse(&self) -> Self {
         let rotation = self.rotation.inverse();
         Self {
@@ -411,6 +455,7 @@ impl Isometry3 {
 impl Mul for Isometry3 {
     type Output = Self;
     /// The frame `r`, given in `self`, in the outer frame.
+    #[inline]
     fn mul(self, r: Self) -> Self {
         Self {
             rotation: self.rotation * r.rotation,
