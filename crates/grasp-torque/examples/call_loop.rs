@@ -8,7 +8,8 @@
 //! wrench 1 % away, alternating: forces up, moments down), `tick` and `tick-full`
 //! (`GraspSolver::resolve` on the same alternating wrenches, with `Check::Lazy` and
 //! `Check::Full`) and `build` (`GraspSolver::new`); the linear view at N = 8 unless
-//! `exact`.
+//! `exact`. `pose` (a hand-form FILE) poses its grasp at every joint's 0.1
+//! (`HandGrasps::pose`, a planner's batch's work per candidate before the build).
 
 use grasp_torque::{
     solve_into, solve_into_with, Check, Cones, GraspSolver, Solution, SolverConfig, WarmStart,
@@ -19,10 +20,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let [_, file, kind, n, rest @ ..] = args.as_slice() else {
         return Err(
-            "usage: call_loop FILE cold|check|full|lazy|warm|tick|tick-full|build N [exact]".into(),
+            "usage: call_loop FILE cold|check|full|lazy|warm|tick|tick-full|build|pose N [exact]"
+                .into(),
         );
     };
     let n: usize = n.parse()?;
+    if kind == "pose" {
+        let hand: grasp_torque::HandFile = serde_json::from_str(&std::fs::read_to_string(file)?)?;
+        let dir = std::path::Path::new(file)
+            .parent()
+            .unwrap_or(std::path::Path::new("."));
+        let robot = grasp_torque::Robot::load(&hand.model_path(dir))?;
+        let grasps = hand.grasps(&robot)?;
+        let q = vec![0.1; robot.independent.len()];
+        for _ in 0..n {
+            black_box(grasps.pose(&grasp_torque::hand::GraspPose {
+                joint_positions: black_box(&q),
+                ..Default::default()
+            })?);
+        }
+        return Ok(());
+    }
     let mut p = grasp_torque::load(file)?.problem;
     p.linearization.sides = 8;
     let config = SolverConfig {
