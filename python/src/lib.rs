@@ -677,7 +677,7 @@ impl Outputs {
 
     fn write(&self, b: usize, k: usize, r: Result<&Solution, &Error>) {
         let i = b * self.wrenches + k;
-        let (code, objective, residual, torque) = match r {
+        let (code, objective, residual, answer) = match r {
             Ok(s) if !s.torque.is_empty() => (
                 status_code(s.status),
                 s.objective,
@@ -694,14 +694,14 @@ impl Outputs {
             *self.objective.add(i) = objective;
             *self.residual.add(i) = residual;
             let row = std::slice::from_raw_parts_mut(self.torque.add(i * self.joints), self.joints);
-            match torque {
+            match answer {
                 Some(s) => row.copy_from_slice(&s.torque),
                 None => row.fill(f64::NAN),
             }
             // Likewise the row i·n .. (i+1)·n of B·K·n.
             if let Some(f) = self.forces {
                 let row = std::slice::from_raw_parts_mut(f.add(i * self.force_dim), self.force_dim);
-                match torque.filter(|s| s.contact_forces.len() == self.force_dim) {
+                match answer.filter(|s| s.contact_forces.len() == self.force_dim) {
                     Some(s) => row.copy_from_slice(&s.contact_forces),
                     None => row.fill(f64::NAN),
                 }
