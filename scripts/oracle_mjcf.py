@@ -18,8 +18,9 @@ writes per configuration:
 - `frames` (the first five configurations): every site's and body's frame in the world
   (`site_xpos`/`site_xmat`, `xpos`/`xmat`), for `Robot::named_frame` and the poses;
 
-and per hand `actuator_limits`, the bound on each actuator's force that
-`"torque_limits": "model"` must give, from MuJoCo's compiled ranges.
+and per hand `actuator_limits`, the limit on each actuator's force that
+`"torque_limits": "model"` must give (a number t for |u| ≤ t, or [lower, upper]), from
+MuJoCo's compiled ranges.
 
 MuJoCo needs every mesh a file names; the fixtures carry none. The script expands the
 includes itself, drops <asset>, <contact>, <sensor> and every <geom> but those a spatial
@@ -175,25 +176,23 @@ def couplings(m):
 
 
 def actuator_limits(m):
-    """Per actuator, the bound |u| ≤ limit of `"torque_limits": "model"` from MuJoCo's
-    compiled model (defaults, classes and autolimits resolved by MuJoCo): the largest
-    symmetric range inside forcerange when force-limited; else, for a force that is a
-    fixed gain times the control (no bias), inside gain × ctrlrange when ctrl-limited;
-    else none (None)."""
+    """Per actuator, the limit of `"torque_limits": "model"` from MuJoCo's compiled model
+    (defaults, classes and autolimits resolved by MuJoCo), as the files write it: its
+    forcerange when force-limited; else, for a force that is a fixed gain times the
+    control (no bias), gain × ctrlrange when ctrl-limited; else none (None). A range
+    [lo, hi] is the number hi when lo = −hi (|u| ≤ hi), and none when empty."""
     out = {}
     for a in range(m.nu):
         name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a)
-        sym = lambda lo, hi: max(min(-lo, hi), 0.0)
         if m.actuator_forcelimited[a]:
-            limit = sym(*m.actuator_forcerange[a])
+            lo, hi = (float(v) for v in m.actuator_forcerange[a])
         elif (m.actuator_ctrllimited[a] and m.actuator_biastype[a] == mujoco.mjtBias.mjBIAS_NONE
               and m.actuator_gaintype[a] == mujoco.mjtGain.mjGAIN_FIXED):
             g = m.actuator_gainprm[a][0]
-            lo, hi = sorted(g * m.actuator_ctrlrange[a])
-            limit = sym(lo, hi)
+            lo, hi = sorted(float(v) for v in g * m.actuator_ctrlrange[a])
         else:
-            limit = None
-        out[name] = limit if limit else None
+            lo, hi = 0.0, 0.0
+        out[name] = None if not lo < hi else hi if lo == -hi else [lo, hi]
     return out
 
 

@@ -75,7 +75,10 @@ fn shadow_tripod_is_held_in_actuator_space() {
         let limits = v["hand"]["actuator_limits"].as_array().unwrap();
         for (ui, l) in u.iter().zip(limits) {
             assert_eq!(l["source"], "forcerange");
-            assert!(ui.abs() <= l["limit"].as_f64().unwrap() * (1.0 + 1e-9));
+            assert!(
+                ui.abs() <= l["limit"].as_f64().unwrap() * (1.0 + 1e-9),
+                "{l}"
+            );
         }
         let r = &v["residuals"];
         assert!(
@@ -128,6 +131,109 @@ fn an_unactuated_direction_that_must_carry_torque_is_named() {
         msg.contains("robot0:FFJ0") && msg.contains("underactuated"),
         "{msg}"
     );
+}
+
+/// A force range that is not symmetric is the actuator's limit as it stands. The Aero
+/// hand's tendons can only pull: given `forcerange="-100 0"` (MuJoCo's sign: a pull
+/// shortens the tendon), the pinch's thumb tendon, which pushed (+0.58) without
+/// limits, is held at 0 and the others pull harder, on both cone kinds and with
+/// Clarabel alike. (Before, the reader took the largest symmetric range inside, |u| ≤
+/// 0, and dropped it as no limit.)
+#[test]
+fn a_pull_only_tendon_is_held() {
+    let dir = std::env::temp_dir().join(format!("gt-mjcf-range-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(fixture("mjcf/menagerie/aero_right.xml")).unwrap();
+    let mut pulls = 0;
+    let text: String = text
+        .lines()
+        .map(|l| {
+            if l.trim_start().starts_with("<position name=\"right_") && l.contains("_A_tendon\"") {
+                pulls += 1;
+                l.replace("/>", r#" forcerange="-100 0"/>"#)
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert_eq!(pulls, 6);
+    std::fs::write(dir.join("aero.xml"), text).unwrap();
+    let mut p: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fixture("hands/aero-pinch.json")).unwrap())
+            .unwrap();
+    p["hand"]["model"] = serde_json::json!("aero.xml");
+    p["torque_limits"] = serde_json::json!("model");
+    let path = dir.join("pinch.json");
+    std::fs::write(&path, p.to_string()).unwrap();
+    let path = path.to_str().unwrap();
+    let free = json(&run(&[
+        "solve",
+        &fixture("hands/aero-pinch.json"),
+        "--format",
+        "json",
+    ]));
+    let sigma_free = free["objective"].as_f64().unwrap();
+    let mut sigmas = Vec::new();
+    let backends: &[&str] = if cfg!(feature = "clarabel") {
+        &["active-set", "clarabel"]
+    } else {
+        &["active-set"]
+    };
+    for cones in ["linear", "exact"] {
+        for backend in backends {
+            let out = run(&[
+                "solve",
+                path,
+                "--cones",
+                cones,
+                "--backend",
+                backend,
+                "--format",
+                "json",
+            ]);
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(0), "{cones} {backend}: {stderr}");
+            let v = json(&out);
+            let names: Vec<&str> = v["actuator_names"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_str().unwrap())
+                .collect();
+            let u = numbers(&v["torque"]);
+            let umax = u.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            for (k, name) in names.iter().enumerate() {
+                if name.ends_with("_A_tendon") {
+                    assert_eq!(
+                        v["hand"]["actuator_limits"][k]["limit"],
+                        serde_json::json!([-100.0, 0.0])
+                    );
+                    assert!(
+                        u[k] <= 1e-7 * umax,
+                        "{cones} {backend}: {name} pushes, u = {}",
+                        u[k]
+                    );
+                }
+            }
+            let th1 = names
+                .iter()
+                .position(|n| *n == "right_th1_A_tendon")
+                .unwrap();
+            assert!(u[th1].abs() <= 1e-7 * umax, "{cones} {backend}: {}", u[th1]);
+            sigmas.push(v["objective"].as_f64().unwrap());
+        }
+    }
+    for s in &sigmas {
+        assert!(*s > 1.1 * sigma_free, "{sigmas:?} against {sigma_free}");
+        assert!((s - sigmas[0]).abs() <= 1e-6 * sigmas[0], "{sigmas:?}");
+    }
+    let text = String::from_utf8_lossy(&run(&["solve", path]).stdout).into_owned();
+    assert!(text.contains("-100 ≤ u ≤ 0  at its limit"), "{text}");
+    let listing =
+        String::from_utf8_lossy(&run(&["hand", dir.join("aero.xml").to_str().unwrap()]).stdout)
+            .into_owned();
+    assert!(listing.contains("-100 ≤ u ≤ 0 (forcerange)"), "{listing}");
 }
 
 #[test]

@@ -152,15 +152,25 @@ def _count(name: str, v: Any, least: int, most: Optional[int] = None) -> int:
 
 
 def _limits(limits: Any) -> Any:
-    """Torque limits as the files write them: ``None`` (JSON ``null``) for a joint
-    without one, which numpy users write ``inf``."""
+    """Torque limits as the files write them: per joint a number t (``|τ| ≤ t``), a
+    pair ``[lower, upper]``, or ``None`` (JSON ``null``) for none, which numpy users
+    write ``inf`` (``-inf`` for a pair's open lower side)."""
     if limits is None or isinstance(limits, str):
         return limits
     if hasattr(limits, "tolist"):
         limits = limits.tolist()
     if not isinstance(limits, (list, tuple)):
         return limits
-    return [None if isinstance(v, float) and v == math.inf else v for v in limits]
+
+    def one(v: Any) -> Any:
+        if hasattr(v, "tolist"):
+            v = v.tolist()
+        if isinstance(v, (list, tuple)) and len(v) == 2:
+            lo, hi = v
+            return [None if lo == -math.inf else lo, None if hi == math.inf else hi]
+        return None if isinstance(v, float) and v == math.inf else v
+
+    return [one(v) for v in limits]
 
 
 def _gravity(gravity: Any, B: int):
@@ -239,7 +249,7 @@ class Problem:
         """A matrix-form problem: G (6 × n), Jᵀ (m × n), one contact dict per contact
         (``{"model": "pcwf", "mu": 0.5}``; ``sfcl``/``sfce`` add ``mu_torsion``), the
         wrench (default zero) and any option of the matrix form (``torque_weights``,
-        ``torque_limits`` (``None`` or ``inf`` for a joint without one),
+        ``torque_limits`` (per joint t, ``[lower, upper]``, or ``None`` or ``inf`` for none),
         ``min_normal_force``, ``joint_names``, ``linearization``, ``internal_forces``,
         ``initial_torque``, ``transmission`` (m × a: τ = T u, the solve then returns
         actuator forces u), ``actuator_names``, ``passive_torque`` (m: the joints'

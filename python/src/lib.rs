@@ -578,7 +578,7 @@ const INVALID: i8 = 5;
 struct BatchSpec {
     contacts: Vec<ContactSpec>,
     torque_weights: Option<Vec<f64>>,
-    torque_limits: Option<Vec<Option<f64>>>,
+    torque_limits: Option<Vec<Option<grasp_torque::TorqueLimit>>>,
     min_normal_force: Option<serde_json::Value>,
     joint_names: Option<Vec<String>>,
     /// T (joints × actuators), shared by every grasp: τ = T u.

@@ -17,7 +17,7 @@ pub(crate) struct HandArgs {
     format: Format,
 }
 
-fn limit(v: Option<f64>) -> serde_json::Value {
+fn limit(v: Option<impl serde::Serialize>) -> serde_json::Value {
     v.map_or(serde_json::Value::Null, |x| json!(x))
 }
 
@@ -187,9 +187,11 @@ pub(crate) fn run(args: &HandArgs) -> Result<u8> {
                         }
                     };
                     let lim = match a.limit {
-                        Some(l) => {
-                            format!("|u| ≤ {} ({:?})", g(l, 5), a.limit_source).to_lowercase()
-                        }
+                        Some(l) => format!(
+                            "{} ({})",
+                            l.describe("u", |v| g(v, 5)),
+                            format!("{:?}", a.limit_source).to_lowercase()
+                        ),
                         None => "unlimited".into(),
                     };
                     outln!(

@@ -328,14 +328,18 @@ fn text_report(name: &str, qp: &TorqueQp, s: &Solution, backend: &str, cones: &s
             g(*t, 7)
         };
         let limit = match limits.get(j).copied().flatten() {
-            Some(l) if l.is_finite() => {
-                let at = if t.abs() >= l * (1.0 - s.diagnostics.check_tolerance.sqrt()) {
+            Some(l) => {
+                // Within √tol of a bound, relative to it or to the largest torque.
+                let near = |b: f64| {
+                    (t - b).abs() <= s.diagnostics.check_tolerance.sqrt() * b.abs().max(tmax)
+                };
+                let at = if l.lower().is_some_and(near) || l.upper().is_some_and(near) {
                     "  at its limit"
                 } else {
                     ""
                 };
                 let var = if model.actuators.is_some() { "u" } else { "τ" };
-                format!("   |{var}| ≤ {}{at}", g(l, 4))
+                format!("   {}{at}", l.describe(var, |v| g(v, 4)))
             }
             _ => String::new(),
         };

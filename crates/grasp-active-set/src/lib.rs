@@ -553,9 +553,16 @@ impl Engine {
             }
             out
         };
-        // A row no torque affects: its norm in y is at rounding level of H D⁻¹'s.
+        // A row no torque affects: its norm in y is at rounding level of H D⁻¹'s. A
+        // torque limit's row is τ_j itself, whose norm in y is at most dinv_j: its own
+        // rounding level, whatever the cone rows' scale (forces in units 1e150 times
+        // smaller make those 1e150 times longer; the limit is as binding).
         let hscale = qp.max_row_norm(&dinv);
         let zero = 1e3 * f64::EPSILON * (m as f64) * hscale.max(f64::MIN_POSITIVE);
+        let zero_of = |i: usize| match qp.rows[i] {
+            RowId::TorqueLimit { joint, .. } => 1e3 * f64::EPSILON * (m as f64) * dinv[joint],
+            _ => zero,
+        };
         let (mut h_row, mut fixed) = (Vec::with_capacity(rows), Vec::new());
         let mut nu = Vec::with_capacity(rows);
         let mut red_row = vec![usize::MAX; rows];
@@ -565,7 +572,7 @@ impl Engine {
         let mut largest_wrench_row = 0.0f64;
         for i in 0..rows {
             let nrm = grasp_core::matrix::norm2(&hnp.row(i)[..k]);
-            if nrm > zero {
+            if nrm > zero_of(i) {
                 red_row[i] = h_row.len();
                 h_row.push(i);
                 nu.push(nrm);
@@ -857,7 +864,13 @@ struct Iter<'s> {
 
 impl<'s> Iter<'s> {
     fn new(s: &'s mut Engine) -> Self {
-        let scale = norm_inf(&s.ws.b[..s.scale_rows]).max(f64::MIN_POSITIVE);
+        // Unloaded, with a torque limit that excludes τ = 0 (a range that does not hold
+        // 0), the limits set the scale.
+        let mut scale = norm_inf(&s.ws.b[..s.scale_rows]);
+        if scale == 0.0 && s.ws.b[s.scale_rows..].iter().any(|&v| v > 0.0) {
+            scale = norm_inf(&s.ws.b[s.scale_rows..]);
+        }
+        let scale = scale.max(f64::MIN_POSITIVE);
         let penalty = s.settings.elastic_penalty * scale.max(1e-12);
         Self {
             s,

@@ -238,7 +238,7 @@ fn infeasible_grasps_are_answers_with_reasons() {
     .unwrap();
     // Torque limits far below what holding the disc needs.
     let mut p = p0.clone();
-    p.torque_limits = Some(vec![Some(0.1); 4]);
+    p.torque_limits = Some(vec![Some(0.1.into()); 4]);
     let s = solve(&mut build(&p), &p.wrench, &WarmStart::default()).unwrap();
     assert_eq!(s.status, Status::Infeasible);
     assert!(s.torque.is_empty());
@@ -274,7 +274,7 @@ fn infeasible_grasps_are_answers_with_reasons() {
     assert_eq!(ok.status, Status::Optimal, "{:?}", ok.reason);
     let mut p = pinch("[0, 0, 0, 0, 0, 0]");
     p.min_normal_force = Some(vec![1.0, 1.0]);
-    p.torque_limits = Some(vec![Some(1e-3); 4]);
+    p.torque_limits = Some(vec![Some(1e-3.into()); 4]);
     let s = solve(&mut build(&p), &p.wrench, &WarmStart::default()).unwrap();
     assert_eq!(s.status, Status::Infeasible, "{:?}", s.reason);
 }

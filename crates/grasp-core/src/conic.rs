@@ -383,7 +383,8 @@ impl ConicForm {
     }
 
     /// `b(w)` into `out`; returns its magnitude α = ‖b(w)‖∞ over every row but the
-    /// torque limits', by which `out` is then divided (unless it is 0: every other row
+    /// torque limits' (unless that is 0 and a limit excludes τ = 0: then over the
+    /// limits' rows), by which `out` is then divided (unless it is 0: every row
     /// homogeneous, τ = 0 optimal). A loose limit (1e6 times the torques) set the scale
     /// before, and every other row then sat at 1e-6 of it, below the solvers'
     /// tolerances.
@@ -391,7 +392,13 @@ impl ConicForm {
         out.copy_from_slice(&self.b0);
         add_columns(out, &self.bw_cols, w, 1.0);
         let (head, tail) = (&out[..self.limit_rows.start], &out[self.limit_rows.end..]);
-        let alpha = head.iter().chain(tail).fold(0.0f64, |a, v| a.max(v.abs()));
+        let mut alpha = head.iter().chain(tail).fold(0.0f64, |a, v| a.max(v.abs()));
+        // Unloaded, x = 0 is the answer unless a torque limit excludes it (a range
+        // that does not hold 0): then the limits set the scale.
+        let limits = &out[self.limit_rows.clone()];
+        if alpha == 0.0 && limits.iter().any(|&v| v < 0.0) {
+            alpha = limits.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        }
         if alpha > 0.0 {
             let inv = 1.0 / alpha;
             out.iter_mut().for_each(|v| *v *= inv);

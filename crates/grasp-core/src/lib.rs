@@ -25,7 +25,7 @@ pub use contact::ContactModel;
 pub use error::{ModelError, ProblemError};
 pub use matrix::Matrix;
 pub use model::{Equilibrium, GraspModel, InternalForces, ModelOptions};
-pub use problem::GraspProblem;
+pub use problem::{GraspProblem, TorqueLimit};
 pub use qp::{
     ConeRepr, Constraints, ContactBlock, EqFactors, ForceSpaceQp, InequalityRows, LeastDistance,
     RowFactors, RowId, TorqueQp,

@@ -25,7 +25,7 @@ use crate::contact::ContactModel;
 use crate::error::ModelError;
 use crate::linalg::{decompose, RankThreshold};
 use crate::matrix::{add_columns, column_major, dot, norm_inf, write_columns, Matrix};
-use crate::problem::GraspProblem;
+use crate::problem::{GraspProblem, TorqueLimit};
 use serde::{Deserialize, Serialize};
 
 /// How the passive internal forces (the null space of `[G; Jᵀ]`) are fixed.
@@ -121,8 +121,8 @@ pub struct GraspModel {
     pub offsets: Vec<usize>,
     /// Objective weights `w_j` (all 1 by default).
     pub weights: Vec<f64>,
-    /// `|τ_j| ≤ limit`; `None` is unlimited.
-    pub torque_limits: Vec<Option<f64>>,
+    /// `|τ_j| ≤ t` or `lower ≤ τ_j ≤ upper`; `None` is unlimited.
+    pub torque_limits: Vec<Option<TorqueLimit>>,
     /// `fz ≥ value` per contact (0 by default).
     pub min_normal_force: Vec<f64>,
     /// Names of the torques the solver chooses: actuators with a transmission, else

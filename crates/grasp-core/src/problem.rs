@@ -5,6 +5,7 @@ use crate::contact::ContactModel;
 use crate::error::ProblemError;
 use crate::matrix::Matrix;
 use crate::model::InternalForces;
+use std::fmt;
 
 /// Most inequality rows a problem may have.
 pub const MAX_ROWS: usize = 1 << 20;
@@ -50,6 +51,15 @@ pub fn flush_subnormal(x: f64) -> f64 {
     }
 }
 
+/// A limit as the file gives it, for error messages: `2.5` or `[0.0, null]`.
+fn limit_json(l: TorqueLimit) -> String {
+    let side = |v: Option<f64>| v.map_or("null".to_string(), |v| format!("{v:?}"));
+    match l {
+        TorqueLimit::Symmetric(t) => format!("{t:?}"),
+        TorqueLimit::Range(lo, hi) => format!("[{}, {}]", side(lo), side(hi)),
+    }
+}
+
 /// What [`in_domain`] expects, for error messages.
 pub const DOMAIN: &str =
     "a finite number of magnitude at most 1e12, and 0 or at least 2.2e-308 (not subnormal)";
@@ -61,6 +71,130 @@ pub const WEIGHT_RANGE: (f64, f64) = (1e-12, 1e12);
 /// beyond this the consistency equalities lose accuracy in those coordinates
 /// (a ratio of 1e18 left `‖C τ − e‖∞` at 1e-6).
 pub const MAX_WEIGHT_RATIO: f64 = 1e8;
+
+/// One joint's (or actuator's) torque limit. In files: a number `t` for `|τ| ≤ t`, or
+/// `[lower, upper]` for `lower ≤ τ ≤ upper`, either side `null` for none (an actuator
+/// whose range is not symmetric: a tendon that only pulls is `[0, f_max]`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TorqueLimit {
+    /// `|τ| ≤ t`, with `t > 0`.
+    Symmetric(f64),
+    /// `lower ≤ τ ≤ upper`; `None` is no bound on that side (both `None`: no limit),
+    /// and `lower < upper`. Neither side needs to be of either sign.
+    Range(Option<f64>, Option<f64>),
+}
+
+impl TorqueLimit {
+    /// The lower bound, if any.
+    pub fn lower(self) -> Option<f64> {
+        match self {
+            TorqueLimit::Symmetric(t) => Some(-t),
+            TorqueLimit::Range(lo, _) => lo,
+        }
+    }
+
+    /// The upper bound, if any.
+    pub fn upper(self) -> Option<f64> {
+        match self {
+            TorqueLimit::Symmetric(t) => Some(t),
+            TorqueLimit::Range(_, hi) => hi,
+        }
+    }
+
+    /// The limit with both bounds scaled by `f > 0` (a change of torque unit).
+    pub fn scaled(self, f: f64) -> Self {
+        match self {
+            TorqueLimit::Symmetric(t) => TorqueLimit::Symmetric(t * f),
+            TorqueLimit::Range(lo, hi) => TorqueLimit::Range(lo.map(|v| v * f), hi.map(|v| v * f)),
+        }
+    }
+
+    /// The limit as a constraint on the variable `x`, its numbers written by `num`:
+    /// `|x| ≤ t`, `lo ≤ x ≤ hi`, `x ≥ lo` or `x ≤ hi`.
+    pub fn describe(self, x: &str, num: impl Fn(f64) -> String) -> String {
+        match self {
+            TorqueLimit::Symmetric(t) => format!("|{x}| ≤ {}", num(t)),
+            TorqueLimit::Range(Some(lo), Some(hi)) => format!("{} ≤ {x} ≤ {}", num(lo), num(hi)),
+            TorqueLimit::Range(Some(lo), None) => format!("{x} ≥ {}", num(lo)),
+            TorqueLimit::Range(None, Some(hi)) => format!("{x} ≤ {}", num(hi)),
+            TorqueLimit::Range(None, None) => "unlimited".into(),
+        }
+    }
+
+    /// The limit from a range `[lower, upper]`: symmetric when `lower = −upper`.
+    pub fn from_range(lower: f64, upper: f64) -> Self {
+        if lower == -upper {
+            TorqueLimit::Symmetric(upper)
+        } else {
+            TorqueLimit::Range(Some(lower), Some(upper))
+        }
+    }
+
+    /// Why the limit is invalid (what is expected), or `None`.
+    fn invalid(self) -> Option<&'static str> {
+        let side = |v: Option<f64>| v.is_none_or(in_domain);
+        match self {
+            TorqueLimit::Symmetric(t) if !(t > 0.0 && in_domain(t)) => Some(LIMIT_EXPECTED),
+            TorqueLimit::Range(lo, hi) if !(side(lo) && side(hi)) => Some(LIMIT_EXPECTED),
+            TorqueLimit::Range(Some(lo), Some(hi)) if lo >= hi => {
+                Some("[lower, upper] with lower < upper")
+            }
+            _ => None,
+        }
+    }
+}
+
+impl From<f64> for TorqueLimit {
+    fn from(t: f64) -> Self {
+        TorqueLimit::Symmetric(t)
+    }
+}
+
+/// What a torque limit must be, for error messages.
+pub const LIMIT_EXPECTED: &str = "a number t > 0 (|τ| ≤ t), [lower, upper] (either null for none; numbers of magnitude at most 1e12, not subnormal), or null for no limit";
+
+impl serde::Serialize for TorqueLimit {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match *self {
+            TorqueLimit::Symmetric(t) => s.serialize_f64(t),
+            TorqueLimit::Range(lo, hi) => [lo, hi].serialize(s),
+        }
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for TorqueLimit {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = TorqueLimit;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(LIMIT_EXPECTED)
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<TorqueLimit, E> {
+                Ok(TorqueLimit::Symmetric(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<TorqueLimit, E> {
+                Ok(TorqueLimit::Symmetric(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<TorqueLimit, E> {
+                Ok(TorqueLimit::Symmetric(v as f64))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut a: A,
+            ) -> Result<TorqueLimit, A::Error> {
+                let wrong = || serde::de::Error::custom(format!("expected {LIMIT_EXPECTED}"));
+                let lo: Option<f64> = a.next_element()?.ok_or_else(wrong)?;
+                let hi: Option<f64> = a.next_element()?.ok_or_else(wrong)?;
+                if a.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    return Err(wrong());
+                }
+                Ok(TorqueLimit::Range(lo, hi))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
 
 /// Everything that defines one grasp-torque problem.
 ///
@@ -81,8 +215,8 @@ pub struct GraspProblem {
     pub linearization: Linearization,
     /// Objective weights `w_j` in `Σ w_j τ_j²`; `None` means all 1.
     pub torque_weights: Option<Vec<f64>>,
-    /// Symmetric limits `|τ_j| ≤ τmax_j`; `None` entries are unlimited.
-    pub torque_limits: Option<Vec<Option<f64>>>,
+    /// Limits `|τ_j| ≤ t_j` or `lower_j ≤ τ_j ≤ upper_j`; `None` entries are unlimited.
+    pub torque_limits: Option<Vec<Option<TorqueLimit>>>,
     /// Minimum normal force per contact, `fz ≥ f_min` (same unit as f); `None` means 0.
     pub min_normal_force: Option<Vec<f64>>,
     /// A starting torque for the solver (used when feasible).
@@ -353,16 +487,12 @@ impl GraspProblem {
         if let Some(l) = &self.torque_limits {
             per_joint("torque_limits", l.len(), m, per)?;
             for (j, v) in l.iter().enumerate() {
-                if let Some(v) = *v {
-                    if !(v > 0.0 && in_domain(v)) {
-                        return Err(ProblemError::invalid(
-                            format!("torque_limits[{j}]"),
-                            format!(
-                                "a number > 0 and at most {MAX_MAGNITUDE:e}, not subnormal, or null for no limit"
-                            ),
-                            v,
-                        ));
-                    }
+                if let Some(why) = v.and_then(TorqueLimit::invalid) {
+                    return Err(ProblemError::invalid(
+                        format!("torque_limits[{j}]"),
+                        why,
+                        v.map_or(String::new(), limit_json),
+                    ));
                 }
             }
         }

@@ -41,7 +41,7 @@ pub enum RowId {
         /// Contact index.
         contact: usize,
     },
-    /// `τ_j ≤ τmax_j` (`upper`) or `−τ_j ≤ τmax_j`.
+    /// `τ_j ≤ upper_j` (`upper`) or `τ_j ≥ lower_j`.
     TorqueLimit {
         /// Joint index.
         joint: usize,
@@ -480,8 +480,13 @@ impl TorqueQp {
             ConeRepr::Inscribed(cone) => cone.faces.nrows(),
             ConeRepr::Exact => 1,
         };
-        let limits = model.torque_limits.iter().flatten().count();
-        let total: usize = (0..constraints.cones.len()).map(face_rows).sum::<usize>() + 2 * limits;
+        let limits: usize = model
+            .torque_limits
+            .iter()
+            .flatten()
+            .map(|l| l.lower().is_some() as usize + l.upper().is_some() as usize)
+            .sum();
+        let total: usize = (0..constraints.cones.len()).map(face_rows).sum::<usize>() + limits;
         // Rows are written in place: Hp = S N, Hw = S Z1 (S block-diagonal); H = S Z2
         // waits for its first reader.
         let (mut hp, mut hw) = (Matrix::zeros(total, d), Matrix::zeros(total, 6));
@@ -513,14 +518,23 @@ impl TorqueQp {
                 rows.push(RowId::of_contact(ci, k, r));
             }
         }
-        // Torque limits: τ_j ≥ −τmax and −τ_j ≥ −τmax, in the solver's v = u − u_p.
+        // Torque limits: τ_j ≥ lower and −τ_j ≥ −upper, in the solver's v = u − u_p.
         for (j, lim) in model.torque_limits.iter().enumerate() {
-            if let Some(t) = *lim {
-                let up = model.passive.torque_offset.get(j).copied().unwrap_or(0.0);
-                for upper in [false, true] {
-                    c0.push(if upper { -t + up } else { -t - up });
-                    rows.push(RowId::TorqueLimit { joint: j, upper });
-                }
+            let Some(lim) = *lim else { continue };
+            let up = model.passive.torque_offset.get(j).copied().unwrap_or(0.0);
+            if let Some(lo) = lim.lower() {
+                c0.push(lo - up);
+                rows.push(RowId::TorqueLimit {
+                    joint: j,
+                    upper: false,
+                });
+            }
+            if let Some(hi) = lim.upper() {
+                c0.push(-hi + up);
+                rows.push(RowId::TorqueLimit {
+                    joint: j,
+                    upper: true,
+                });
             }
         }
         Self {
@@ -713,20 +727,20 @@ impl ForceSpaceQp {
             }
         }
         for (j, lim) in model.torque_limits.iter().enumerate() {
-            if let Some(t) = *lim {
-                for upper in [false, true] {
-                    let sign = if upper { -1.0 } else { 1.0 };
-                    h_rows.push(
-                        model
-                            .jacobian_transpose
-                            .row(j)
-                            .iter()
-                            .map(|v| sign * v)
-                            .collect(),
-                    );
-                    c0.push(-t);
-                    rows.push(RowId::TorqueLimit { joint: j, upper });
-                }
+            let Some(lim) = *lim else { continue };
+            for (upper, bound) in [(false, lim.lower()), (true, lim.upper())] {
+                let Some(b) = bound else { continue };
+                let sign = if upper { -1.0 } else { 1.0 };
+                h_rows.push(
+                    model
+                        .jacobian_transpose
+                        .row(j)
+                        .iter()
+                        .map(|v| sign * v)
+                        .collect(),
+                );
+                c0.push(sign * b);
+                rows.push(RowId::TorqueLimit { joint: j, upper });
             }
         }
         // [G; E] f = [w; 0] with independent rows: row_basisᵀ f = row_transform · [w; 0].

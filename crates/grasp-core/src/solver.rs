@@ -646,15 +646,20 @@ impl TorqueQp {
     }
 
     /// The largest violation `c_i − H_i τ` of the torque-limit rows, and whether one
-    /// exceeds `tol` relative to its terms. A limit t is the pair of rows `±τ_j ≥ −t`
-    /// (TorqueQp::new): the larger violation of the two is `|τ_j| − t`.
+    /// exceeds `tol` relative to its terms: the rows `τ_j ≥ lower` and `−τ_j ≥ −upper`
+    /// (TorqueQp::new) are violated by `lower − τ_j` and `τ_j − upper`. Each τ_j comes
+    /// out of the solver's linear algebra with an error relative to the largest torque,
+    /// which joins the terms: a bound at 0 (a tendon that only pulls) has no other.
     fn limit_violation(&self, tau: &[f64], tol: f64) -> (f64, bool) {
         let (mut viol, mut bad) = (f64::NEG_INFINITY, false);
-        for (t, lim) in tau.iter().zip(&self.model.torque_limits) {
-            if let Some(l) = *lim {
-                let v = t.abs() - l;
+        let scale = norm_inf(tau);
+        for (&t, lim) in tau.iter().zip(&self.model.torque_limits) {
+            let Some(lim) = *lim else { continue };
+            let lower = lim.lower().map(|lo| (lo - t, lo));
+            let upper = lim.upper().map(|hi| (t - hi, hi));
+            for (v, b) in lower.into_iter().chain(upper) {
                 viol = viol.max(v);
-                bad |= exceeds(v, tol * (l + t.abs()));
+                bad |= exceeds(v, tol * (b.abs() + t.abs() + scale));
             }
         }
         (viol, bad)

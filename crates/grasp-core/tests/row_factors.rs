@@ -15,7 +15,11 @@ fn views(path: &Path, every: usize) -> (Arc<GraspModel>, [TorqueQp; 2]) {
     let mut p = load_problem(path).unwrap();
     let m = p.jacobian_transpose.nrows();
     let t = p.transmission.as_ref().map_or(m, |t| t.matrix.ncols());
-    p.torque_limits = Some((0..t).map(|j| (j % every == 0).then_some(5.0)).collect());
+    p.torque_limits = Some(
+        (0..t)
+            .map(|j| (j % every == 0).then_some(5.0.into()))
+            .collect(),
+    );
     let model = Arc::new(GraspModel::new(&p, &ModelOptions::default()).unwrap());
     let qps = [
         TorqueQp::linearized(model.clone(), &p.linearization),

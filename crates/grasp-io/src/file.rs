@@ -9,7 +9,7 @@ use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
 use grasp_core::matrix::Matrix;
 use grasp_core::model::InternalForces;
-use grasp_core::problem::GraspProblem;
+use grasp_core::problem::{GraspProblem, TorqueLimit};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -142,8 +142,9 @@ pub struct Options {
     pub linearization: Option<Linearization>,
     /// Objective weights, one per joint (> 0).
     pub torque_weights: Option<Vec<f64>>,
-    /// `|τ_j| ≤ limit`, one per joint; `null` for no limit.
-    pub torque_limits: Option<Vec<Option<f64>>>,
+    /// One per joint: `t` for `|τ_j| ≤ t`, `[lower, upper]` (either `null`), or `null`
+    /// for no limit.
+    pub torque_limits: Option<Vec<Option<TorqueLimit>>>,
     /// `fz ≥ value`: one number for every contact, or a list with one per contact.
     pub min_normal_force: Option<serde_json::Value>,
     /// A starting torque, one per joint.
@@ -177,9 +178,10 @@ pub struct MatrixFile {
     /// Objective weights, one per joint (> 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub torque_weights: Option<Vec<f64>>,
-    /// `|τ_j| ≤ limit`, one per joint; `null` for no limit.
+    /// One per joint: `t` for `|τ_j| ≤ t`, `[lower, upper]` (either `null`), or `null`
+    /// for no limit.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub torque_limits: Option<Vec<Option<f64>>>,
+    pub torque_limits: Option<Vec<Option<TorqueLimit>>>,
     /// `fz ≥ value`: one number for every contact, or a list with one per contact.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min_normal_force: Option<serde_json::Value>,

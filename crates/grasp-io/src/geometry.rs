@@ -119,7 +119,7 @@ pub struct GeometryFile {
     pub torque_weights: Option<Vec<f64>>,
     /// See the matrix form.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub torque_limits: Option<Vec<Option<f64>>>,
+    pub torque_limits: Option<Vec<Option<grasp_core::TorqueLimit>>>,
     /// See the matrix form.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min_normal_force: Option<serde_json::Value>,

@@ -16,7 +16,7 @@ use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
 use grasp_core::matrix::Matrix;
 use grasp_core::problem::{
-    contact_count, flush_subnormal, in_domain, GraspProblem, MAX_JOINTS, MAX_MAGNITUDE,
+    contact_count, flush_subnormal, in_domain, GraspProblem, TorqueLimit, MAX_JOINTS, MAX_MAGNITUDE,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -217,8 +217,9 @@ pub struct HandReport {
 pub struct ActuatorLimit {
     /// The actuator.
     pub actuator: String,
-    /// `|u| ≤ limit`, in the actuator's force unit (N or N·m times its gear's unit).
-    pub limit: Option<f64>,
+    /// `|u| ≤ t` (a number) or `lower ≤ u ≤ upper` (`[lower, upper]`), in the
+    /// actuator's force unit (N or N·m times its gear's unit).
+    pub limit: Option<TorqueLimit>,
     /// Where it comes from.
     pub source: crate::urdf::LimitSource,
 }
@@ -579,7 +580,8 @@ impl HandFile {
         let (torque_limits, limits_from) = match &self.torque_limits {
             None | Some(serde_json::Value::Null) => (None, "none"),
             Some(serde_json::Value::String(s)) if s == "model" && !columns.is_empty() => {
-                let limits: Vec<Option<f64>> = columns.iter().map(|&a| robot.actuators[a].limit).collect();
+                let limits: Vec<Option<TorqueLimit>> =
+                    columns.iter().map(|&a| robot.actuators[a].limit).collect();
                 for &a in &columns {
                     let act = &robot.actuators[a];
                     if act.limit.is_none() {
@@ -595,9 +597,9 @@ impl HandFile {
                 (Some(limits), "model")
             }
             Some(serde_json::Value::String(s)) if s == "model" => {
-                let limits: Vec<Option<f64>> = rows
+                let limits: Vec<Option<TorqueLimit>> = rows
                     .iter()
-                    .map(|&k| robot.joints[robot.independent[k]].effort)
+                    .map(|&k| robot.joints[robot.independent[k]].effort.map(TorqueLimit::Symmetric))
                     .collect();
                 for (r, l) in limits.iter().enumerate() {
                     if l.is_none() {
@@ -613,13 +615,14 @@ impl HandFile {
                 (Some(limits), "model")
             }
             Some(v @ serde_json::Value::Array(_)) => {
-                let limits: Vec<Option<f64>> = serde_json::from_value(v.clone()).map_err(|_| {
-                    ProblemError::invalid(
-                        "torque_limits",
-                        "\"model\", or a list with one number > 0 or null per joint",
-                        v,
-                    )
-                })?;
+                let limits: Vec<Option<TorqueLimit>> =
+                    serde_json::from_value(v.clone()).map_err(|_| {
+                        ProblemError::invalid(
+                            "torque_limits",
+                            "\"model\", or a list with one limit per joint: a number t > 0 (|τ| ≤ t), [lower, upper] (either null) or null",
+                            v,
+                        )
+                    })?;
                 (Some(limits), "file")
             }
             Some(other) => {

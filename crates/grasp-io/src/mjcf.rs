@@ -38,6 +38,7 @@ use crate::urdf::{
     MAX_DEPTH, MAX_LINKS,
 };
 use grasp_core::error::ProblemError;
+use grasp_core::TorqueLimit;
 use std::collections::{BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -1546,16 +1547,14 @@ impl Robot {
                 // The ranges that limit (None: unlimited).
                 let forcerange = v.limits("force", c.autolimits)?;
                 let ctrlrange = v.limits("ctrl", c.autolimits)?;
-                // The largest |u| inside the range on both sides of 0.
-                let symmetric = |(lo, hi): (f64, f64)| (-lo).min(hi).max(0.0);
                 let bias = match e.name.as_str() {
                     "general" => v.get("biastype").unwrap_or("none") != "none",
                     "motor" => false,
                     _ => true,
                 };
                 let gain_fixed = v.get("gaintype").unwrap_or("fixed") == "fixed";
-                let (limit, source, range) = if let Some(fr) = forcerange {
-                    (Some(symmetric(fr)), LimitSource::Forcerange, fr)
+                let (range, source) = if let Some(fr) = forcerange {
+                    (Some(fr), LimitSource::Forcerange)
                 } else if let Some((lo, hi)) = ctrlrange.filter(|_| !bias && gain_fixed) {
                     let gain = if e.name == "motor" {
                         1.0
@@ -1563,23 +1562,20 @@ impl Robot {
                         v.leading("gainprm", 10)?.unwrap_or(1.0)
                     };
                     let (a, b) = (gain * lo, gain * hi);
-                    let fr = (a.min(b), a.max(b));
-                    (Some(symmetric(fr)), LimitSource::Ctrlrange, fr)
+                    (Some((a.min(b), a.max(b))), LimitSource::Ctrlrange)
                 } else {
-                    (None, LimitSource::None, (0.0, 0.0))
+                    (None, LimitSource::None)
                 };
-                if limit.is_some() && range.0 != -range.1 {
-                    t.warnings.push(format!(
-                        "{}: {}: actuator `{name}` has the asymmetric force range [{}, {}]; the model's limits are symmetric, so |u| ≤ {} is used",
-                        r.files[e.file], r.at(e), range.0, range.1, limit.unwrap_or(0.0)
-                    ));
-                }
+                // (An empty range limits nothing, as MuJoCo's compiler has it.)
+                let limit = range
+                    .filter(|(lo, hi)| lo < hi)
+                    .map(|(lo, hi)| TorqueLimit::from_range(lo, hi));
                 actuators.push(Actuator {
                     name,
                     kind: e.name.clone(),
                     drive,
-                    limit: limit.filter(|&l| l > 0.0),
-                    limit_source: if limit.is_some_and(|l| l > 0.0) {
+                    limit,
+                    limit_source: if limit.is_some() {
                         source
                     } else {
                         LimitSource::None

@@ -208,8 +208,8 @@ pub struct Actuator {
     pub kind: String,
     /// How its force moves the joints.
     pub drive: Drive,
-    /// `|u| ≤ limit`.
-    pub limit: Option<f64>,
+    /// Its force range: `|u| ≤ t`, or `lower ≤ u ≤ upper` when not symmetric.
+    pub limit: Option<grasp_core::TorqueLimit>,
     /// Where the limit comes from.
     pub limit_source: LimitSource,
     /// Line of the element.

@@ -4,6 +4,7 @@
 //! named errors.
 
 use grasp_core::error::ProblemError;
+use grasp_core::TorqueLimit;
 use grasp_io::hand::HandFile;
 use grasp_io::mass::LinkMass;
 use grasp_io::urdf::Robot;
@@ -132,7 +133,8 @@ fn jacobians_and_transmissions_match_mujoco() {
                 .as_ref()
                 .expect("model limits were asked for");
             for (a, aname) in t.actuator_names.iter().enumerate() {
-                let want = oracle["actuator_limits"][aname].as_f64();
+                let want: Option<TorqueLimit> =
+                    serde_json::from_value(oracle["actuator_limits"][aname].clone()).unwrap();
                 assert_eq!(limits[a], want, "{label}: the limit of {aname}");
             }
             // The springs' torques (MuJoCo's qfrc_spring reduced by the couplings; none
@@ -377,7 +379,7 @@ fn without_autolimits_the_flags_decide() {
     assert_eq!((j.lower, j.upper), (None, None));
     assert!((k.upper.unwrap() - 10f64.to_radians()).abs() < 1e-15);
     let limit = |name: &str| r.actuators.iter().find(|a| a.name == name).unwrap().limit;
-    assert_eq!(limit("f"), Some(2.0));
+    assert_eq!(limit("f"), Some(TorqueLimit::Range(Some(-2.0), Some(3.0))));
     assert_eq!(limit("c"), None);
     let text = r#"<mujoco><worldbody><body name="b"><joint name="j" axis="0 0 1" range="2 1"/>
       </body></worldbody><actuator><motor name="f" joint="j" forcerange="0 0" ctrlrange="1 -1"/>

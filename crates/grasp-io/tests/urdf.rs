@@ -2,6 +2,7 @@
 //! the Jacobian against finite differences of the forward kinematics, mimic couplings,
 //! and named errors for malformed descriptions and hand files.
 
+use grasp_core::TorqueLimit;
 use grasp_io::frame::{UnitQuaternion, Vector3};
 use grasp_io::hand::HandFile;
 use grasp_io::urdf::Robot;
@@ -137,7 +138,9 @@ fn jacobians_match_pinocchio() {
                 .as_ref()
                 .expect("model limits were asked for");
             for (j, jname) in p.joint_names.iter().enumerate() {
-                let want = oracle["effort_limits"][jname].as_f64();
+                let want = oracle["effort_limits"][jname]
+                    .as_f64()
+                    .map(TorqueLimit::Symmetric);
                 assert_eq!(limits[j], want, "{label}: the effort limit of {jname}");
             }
         }
@@ -772,7 +775,10 @@ fn model_limits_and_joint_order() {
         p.joint_names,
         ["joint_0.0", "joint_1.0", "joint_2.0", "joint_3.0"]
     );
-    assert_eq!(p.torque_limits.as_deref(), Some(&[Some(10.0); 4][..]));
+    assert_eq!(
+        p.torque_limits.as_deref(),
+        Some(&[Some(10.0.into()); 4][..])
+    );
     assert_eq!(
         built.report.defaulted_joints,
         ["joint_0.0", "joint_2.0", "joint_3.0"]

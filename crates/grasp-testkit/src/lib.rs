@@ -291,7 +291,7 @@ pub fn rescale(p: &grasp_core::GraspProblem, l: f64, f: f64) -> grasp_core::Gras
         fmin.iter_mut().for_each(|v| *v *= f);
     }
     if let Some(lim) = &mut q.torque_limits {
-        lim.iter_mut().flatten().for_each(|v| *v *= l * f);
+        lim.iter_mut().flatten().for_each(|v| *v = v.scaled(l * f));
     }
     if let Some(tp) = &mut q.passive_torque {
         tp.iter_mut().for_each(|v| *v *= l * f);

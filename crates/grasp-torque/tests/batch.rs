@@ -122,7 +122,7 @@ fn a_bad_or_infeasible_grasp_does_not_fail_the_batch() {
     wrong_size.contacts.pop();
     let mut infeasible = good.clone();
     // A wrench no fingertip contact can resist with torques this small.
-    infeasible.torque_limits = Some(vec![Some(1e-6); infeasible.joints()]);
+    infeasible.torque_limits = Some(vec![Some(1e-6.into()); infeasible.joints()]);
     let mut nan_wrench = BatchGrasp::new(good.clone());
     nan_wrench.wrenches = vec![
         good.wrench,

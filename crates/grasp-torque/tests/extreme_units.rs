@@ -49,7 +49,7 @@ fn rescaled(p: &GraspProblem, unit: Unit, c: f64) -> (GraspProblem, f64) {
         Unit::Torque | Unit::Everything => {
             scale(&mut q.jacobian_transpose);
             if let Some(lim) = &mut q.torque_limits {
-                lim.iter_mut().flatten().for_each(|v| *v *= c);
+                lim.iter_mut().flatten().for_each(|v| *v = v.scaled(c));
             }
             if let Some(t) = &mut q.initial_torque {
                 t.iter_mut().for_each(|v| *v *= c);
@@ -72,7 +72,14 @@ fn rescaled(p: &GraspProblem, unit: Unit, c: f64) -> (GraspProblem, f64) {
 /// not zero (1e-300 makes the geometry fixtures' entries at rounding level, such as
 /// the Shadow tripod's 4e-19, subnormal).
 fn within_bound(q: &GraspProblem) -> bool {
-    let limits = q.torque_limits.iter().flatten().flatten();
+    let limits: Vec<f64> = q
+        .torque_limits
+        .iter()
+        .flatten()
+        .flatten()
+        .flat_map(|l| [l.lower(), l.upper()])
+        .flatten()
+        .collect();
     q.grasp_matrix
         .as_slice()
         .iter()
@@ -80,7 +87,7 @@ fn within_bound(q: &GraspProblem) -> bool {
         .chain(&q.wrench)
         .chain(q.min_normal_force.iter().flatten())
         .chain(q.passive_torque.iter().flatten())
-        .chain(limits)
+        .chain(&limits)
         .all(|&v| grasp_torque::problem::in_domain(v))
 }
 
@@ -154,7 +161,7 @@ fn loose_torque_limits_do_not_change_the_answer() {
             for factor in [1e3, 1e6, 1e9, 1e12] {
                 let limit = (largest * factor).min(grasp_torque::problem::MAX_MAGNITUDE);
                 let mut q = p.clone();
-                q.torque_limits = Some(vec![Some(limit); p.actuated()]);
+                q.torque_limits = Some(vec![Some(limit.into()); p.actuated()]);
                 let s = run(&q, cones);
                 let at = format!("{name} {cones} limits {limit:e}");
                 assert!(s.is_optimal(), "{at}: {:?} {:?}", s.status, s.reason);

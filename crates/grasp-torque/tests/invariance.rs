@@ -157,7 +157,7 @@ proptest! {
         let nc = p.contacts.len();
         p.min_normal_force = Some((0..nc).map(|i| fmin * ((i % 3) as f64) / 2.0).collect());
         let m = p.joints();
-        p.torque_limits = Some((0..m).map(|j| (j.is_multiple_of(2)).then_some(limit)).collect());
+        p.torque_limits = Some((0..m).map(|j| (j.is_multiple_of(2)).then_some(limit.into())).collect());
         let a = run(&p, Backend::ActiveSet, false);
         let b = run(&p, Backend::Clarabel, false);
         let e = run(&p, Backend::Clarabel, true);

@@ -83,9 +83,11 @@ fn direct(p: &GraspProblem) -> Direct {
     }
     for (j, lim) in p.torque_limits.iter().flatten().enumerate() {
         if let Some(l) = *lim {
-            for sign in [1.0, -1.0] {
+            // u_j ≤ upper and −u_j ≤ −lower.
+            for (sign, bound) in [(1.0, l.upper()), (-1.0, l.lower().map(|v| -v))] {
+                let Some(bound) = bound else { continue };
                 put(row, n + j, sign, &mut ii, &mut jj);
-                b.push(l);
+                b.push(bound);
                 row += 1;
                 linear += 1;
             }
@@ -380,7 +382,7 @@ fn zero_passive_torques_change_nothing_and_the_problem_is_homogeneous() {
                 f.iter_mut().for_each(|v| *v *= k);
             }
             if let Some(l) = scaled.torque_limits.as_mut() {
-                l.iter_mut().flatten().for_each(|v| *v *= k);
+                l.iter_mut().flatten().for_each(|v| *v = v.scaled(k));
             }
             let t = run(&scaled, Backend::ActiveSet, cones);
             assert_eq!(s.status, t.status, "seed {seed} {cones:?}");

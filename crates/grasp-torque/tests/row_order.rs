@@ -40,7 +40,7 @@ fn grasp(seed: u64, null_space: bool) -> GraspProblem {
     p.torque_weights = Some((0..m).map(|_| rng.uniform(0.5, 4.0)).collect());
     p.torque_limits = Some(
         (0..m)
-            .map(|j| (j % 2 == 0).then(|| rng.uniform(0.5, 3.0)))
+            .map(|j| (j % 2 == 0).then(|| rng.uniform(0.5, 3.0).into()))
             .collect(),
     );
     p.min_normal_force = Some(
