@@ -179,20 +179,46 @@ def actuator_limits(m):
     """Per actuator, the limit of `"torque_limits": "model"` from MuJoCo's compiled model
     (defaults, classes and autolimits resolved by MuJoCo), as the files write it: its
     forcerange when force-limited; else, for a force that is a fixed gain times the
-    control (no bias), gain × ctrlrange when ctrl-limited; else none (None). A range
-    [lo, hi] is the number hi when lo = −hi (|u| ≤ hi), and none when empty."""
+    control (no bias), gain × ctrlrange when ctrl-limited; then narrowed by the
+    actuatorfrcrange of each joint it alone drives (MuJoCo clamps the total actuator
+    force on a joint: moment × u within the range; the moment from `actuator_moment` at
+    qpos0, constant for actuators on joints and fixed tendons; a joint that a spatial
+    tendon's actuator also moves is shared). A range [lo, hi] is the number hi when
+    lo = −hi (|u| ≤ hi), and none when empty."""
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    moment = np.zeros((m.nu, m.nv))
+    mujoco.mju_sparse2dense(moment, d.actuator_moment, d.moment_rownnz,
+                            d.moment_rowadr, d.moment_colind)
+    spatial = [m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_TENDON
+               and m.tendon_num[m.actuator_trnid[a][0]] > 0
+               and m.wrap_type[m.tendon_adr[m.actuator_trnid[a][0]]] != mujoco.mjtWrap.mjWRAP_JOINT
+               for a in range(m.nu)]
+    drivers = [(moment[:, v] != 0).sum() for v in range(m.nv)]
     out = {}
     for a in range(m.nu):
         name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a)
+        lo, hi = -np.inf, np.inf
         if m.actuator_forcelimited[a]:
             lo, hi = (float(v) for v in m.actuator_forcerange[a])
         elif (m.actuator_ctrllimited[a] and m.actuator_biastype[a] == mujoco.mjtBias.mjBIAS_NONE
               and m.actuator_gaintype[a] == mujoco.mjtGain.mjGAIN_FIXED):
             g = m.actuator_gainprm[a][0]
             lo, hi = sorted(float(v) for v in g * m.actuator_ctrlrange[a])
+        if not spatial[a]:
+            for v in range(m.nv):
+                j, arm = m.dof_jntid[v], moment[a, v]
+                if arm == 0 or not m.jnt_actfrclimited[j] or drivers[v] != 1:
+                    continue
+                jlo, jhi = (float(x) / arm for x in m.jnt_actfrcrange[j])
+                jlo, jhi = min(jlo, jhi), max(jlo, jhi)
+                lo, hi = max(lo, jlo), min(hi, jhi)
+        if not lo < hi or (lo == -np.inf and hi == np.inf):
+            out[name] = None
+        elif lo == -hi:
+            out[name] = hi
         else:
-            lo, hi = 0.0, 0.0
-        out[name] = None if not lo < hi else hi if lo == -hi else [lo, hi]
+            out[name] = [None if lo == -np.inf else lo, None if hi == np.inf else hi]
     return out
 
 

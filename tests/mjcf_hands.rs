@@ -236,6 +236,55 @@ fn a_pull_only_tendon_is_held() {
     assert!(listing.contains("-100 ≤ u ≤ 0 (forcerange)"), "{listing}");
 }
 
+/// Joints' `actuatorfrcrange` (MuJoCo's clamp on the total actuator force at a joint)
+/// narrows the force range of the one actuator that drives the joint, through its arm:
+/// the test hand's f1_abd joint (gear 1, `forcerange` ±0.5) to [−0.3, 0.4], th_slide
+/// (gear 50, `ctrlrange` ±2) to [−60, 80] / 50, f2_flex (arm 0.02 through the f2_curl
+/// tendon) to [−20, 15]; f2_mid, which two actuators drive, is not applied, with a
+/// warning. `cargo test -p grasp-io --test mjcf` checks the same against MuJoCo's
+/// compiled ranges and moment arms.
+#[test]
+fn a_joints_actuator_force_range_limits_its_one_actuator() {
+    let out = run(&[
+        "hand",
+        &fixture("mjcf/test/tendon_finger.xml"),
+        "--format",
+        "json",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("actuatorfrcrange of f2_mid"), "{stderr}");
+    let v = json(&out);
+    let by_name = |n: &str| {
+        v["actuators"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|a| a["name"] == n)
+            .unwrap()
+            .clone()
+    };
+    for (name, limit, source) in [
+        ("f1_abd", serde_json::json!([-0.3, 0.4]), "actuatorfrcrange"),
+        ("thumb", serde_json::json!([-1.2, 1.6]), "actuatorfrcrange"),
+        (
+            "f2_tendon",
+            serde_json::json!([-20.0, 15.0]),
+            "actuatorfrcrange",
+        ),
+        ("f1_tendon", serde_json::json!(40.0), "ctrlrange"),
+        ("f2_mid", serde_json::Value::Null, "none"),
+    ] {
+        let a = by_name(name);
+        assert_eq!(
+            (&a["limit"], a["limit_source"].as_str().unwrap()),
+            (&limit, source),
+            "{name}"
+        );
+    }
+    let joints = v["independent_joints"].as_array().unwrap();
+    assert_eq!(joints[0]["effort"], serde_json::json!([-0.3, 0.4]));
+}
+
 #[test]
 fn mjcf_listing_and_errors() {
     let out = run(&["hand", &fixture("mjcf/shadow_hand/shadow_hand.xml")]);

@@ -28,6 +28,16 @@ pub(crate) fn run(args: &HandArgs) -> Result<u8> {
         eprintln!("warning: {w}");
     }
     let joint = |j: usize| &robot.joints[j];
+    // Each actuator's limit as `"torque_limits": "model"` takes it (joints'
+    // actuatorfrcrange included).
+    let all: Vec<usize> = (0..robot.actuators.len()).collect();
+    let grasp_torque::hand::ModelLimits { limits, shared } = robot.actuator_limits(&all)?;
+    if !shared.is_empty() {
+        eprintln!(
+            "warning: the actuatorfrcrange of {} bounds several actuators' forces together (or a spatial tendon's): not applied",
+            shared.join(", ")
+        );
+    }
     let moving: Vec<usize> = (0..robot.joints.len())
         .filter(|&j| joint(j).kind != JointKind::Fixed)
         .collect();
@@ -82,12 +92,12 @@ pub(crate) fn run(args: &HandArgs) -> Result<u8> {
                     "independent_joints": dedup(c.iter().map(|&j| leader(j).0)),
                 })).collect::<Vec<_>>(),
                 "sites": robot.sites.iter().map(|s| json!({"name": s.name, "link": robot.links[s.link]})).collect::<Vec<_>>(),
-                "actuators": robot.actuators.iter().map(|a| {
+                "actuators": robot.actuators.iter().zip(&limits).map(|(a, (lim, source))| {
                     let mut v = json!({
                         "name": a.name,
                         "type": a.kind,
-                        "limit": limit(a.limit),
-                        "limit_source": a.limit_source,
+                        "limit": limit(*lim),
+                        "limit_source": source,
                     });
                     match &a.drive {
                         Drive::Fixed(moment) => v["moment"] = json!(moment.iter().map(|&(j, m)| (joint(j).name.clone(), m)).collect::<std::collections::BTreeMap<_, _>>()),
@@ -137,7 +147,8 @@ pub(crate) fn run(args: &HandArgs) -> Result<u8> {
                     jt.kind.name(),
                     show(jt.lower),
                     show(jt.upper),
-                    show(jt.effort)
+                    jt.effort
+                        .map_or("—".into(), |l| l.describe("τ", |x| g(x, 5)))
                 );
             }
             let mimics: Vec<usize> = moving
@@ -159,14 +170,14 @@ pub(crate) fn run(args: &HandArgs) -> Result<u8> {
                 }
             }
             if !robot.actuators.is_empty() {
-                outln!("\nactuators (τ = T u: moment arms on the joints; |u| ≤ limit)");
+                outln!("\nactuators (τ = T u: moment arms on the joints; the force u within its limit)");
                 let width = robot
                     .actuators
                     .iter()
                     .map(|a| a.name.chars().count())
                     .max()
                     .unwrap_or(0);
-                for a in &robot.actuators {
+                for (a, (lim, source)) in robot.actuators.iter().zip(&limits) {
                     let arms: Vec<String> = match &a.drive {
                         Drive::Fixed(moment) => moment
                             .iter()
@@ -186,11 +197,11 @@ pub(crate) fn run(args: &HandArgs) -> Result<u8> {
                             )]
                         }
                     };
-                    let lim = match a.limit {
+                    let lim = match lim {
                         Some(l) => format!(
                             "{} ({})",
                             l.describe("u", |v| g(v, 5)),
-                            format!("{:?}", a.limit_source).to_lowercase()
+                            format!("{source:?}").to_lowercase()
                         ),
                         None => "unlimited".into(),
                     };

@@ -11,7 +11,7 @@
 use crate::file::{ModelName, Options};
 use crate::frame::{Isometry3, UnitQuaternion, Vector3};
 use crate::geometry::{check_vec, contact_frame, UNIT_TOLERANCE};
-use crate::urdf::{nearest, Drive, JointKind, Pose, Robot};
+use crate::urdf::{nearest, Drive, JointKind, LimitSource, Pose, Robot};
 use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
 use grasp_core::matrix::Matrix;
@@ -222,6 +222,123 @@ pub struct ActuatorLimit {
     pub limit: Option<TorqueLimit>,
     /// Where it comes from.
     pub source: crate::urdf::LimitSource,
+}
+
+/// The actuators' force limits as `"torque_limits": "model"` takes them
+/// ([`Robot::actuator_limits`]).
+#[derive(Clone, Debug)]
+pub struct ModelLimits {
+    /// Per actuator asked for: its limit (`None`: unlimited) and where it comes from.
+    pub limits: Vec<(Option<TorqueLimit>, LimitSource)>,
+    /// The joints whose `actuatorfrcrange` bounds no single actuator: not applied.
+    pub shared: Vec<String>,
+}
+
+impl Robot {
+    /// Each of the actuators `columns`' force limit for `"torque_limits": "model"`, and
+    /// where it comes from: its own range, narrowed by the `actuatorfrcrange` of every
+    /// joint it alone drives through a constant arm m (MuJoCo clamps the total actuator
+    /// force on a joint, here `m u`, to that range). Also the joints whose range bounds
+    /// several actuators' forces together, or a spatial tendon's arm that changes with
+    /// the configuration: no bound on one actuator, so not applied (callers warn). An
+    /// actuator whose ranges leave no force is an error.
+    pub fn actuator_limits(&self, columns: &[usize]) -> Result<ModelLimits, ProblemError> {
+        // Per actuator, the joints it moves: (joint, constant arm, or None for a spatial
+        // tendon's).
+        let moves: Vec<Vec<(usize, Option<f64>)>> = self
+            .actuators
+            .iter()
+            .map(|a| match &a.drive {
+                Drive::Fixed(moment) => {
+                    let mut v: Vec<(usize, Option<f64>)> = Vec::new();
+                    for &(j, m) in moment {
+                        match v.iter_mut().find(|e| e.0 == j) {
+                            Some((_, Some(s))) => *s += m,
+                            _ => v.push((j, Some(m))),
+                        }
+                    }
+                    v.retain(|e| e.1 != Some(0.0));
+                    v
+                }
+                Drive::Tendon { tendon, .. } => self
+                    .tendon_joints(*tendon)
+                    .into_iter()
+                    .map(|j| (j, None))
+                    .collect(),
+            })
+            .collect();
+        let mut drivers = vec![0usize; self.joints.len()];
+        for v in &moves {
+            for &(j, _) in v {
+                drivers[j] += 1;
+            }
+        }
+        let mut shared = Vec::new();
+        let mut out = Vec::with_capacity(columns.len());
+        for &a in columns {
+            let act = &self.actuators[a];
+            let (mut lo, mut hi) = (
+                act.limit.and_then(|l| l.lower()),
+                act.limit.and_then(|l| l.upper()),
+            );
+            let mut source = act.limit_source;
+            for &(j, arm) in &moves[a] {
+                let Some(range) = self.joints[j].effort else {
+                    continue;
+                };
+                let name = &self.joints[j].name;
+                let m = match arm {
+                    Some(m) if drivers[j] == 1 => m,
+                    _ => {
+                        if !shared.contains(name) {
+                            shared.push(name.clone());
+                        }
+                        continue;
+                    }
+                };
+                // lower ≤ m u ≤ upper.
+                let (a_lo, a_hi) = (range.lower().map(|v| v / m), range.upper().map(|v| v / m));
+                let (u_lo, u_hi) = if m > 0.0 { (a_lo, a_hi) } else { (a_hi, a_lo) };
+                if let Some(v) = u_lo.filter(|&v| lo.is_none_or(|l| v > l)) {
+                    lo = Some(v);
+                    source = LimitSource::Actuatorfrcrange;
+                }
+                if let Some(v) = u_hi.filter(|&v| hi.is_none_or(|h| v < h)) {
+                    hi = Some(v);
+                    source = LimitSource::Actuatorfrcrange;
+                }
+                if let (Some(l), Some(h)) = (lo, hi) {
+                    if l >= h {
+                        return Err(ProblemError::invalid(
+                            "torque_limits",
+                            format!(
+                                "actuator ranges that leave a force: `{}`'s own range and joint `{name}`'s actuatorfrcrange (through its arm {m}) leave none",
+                                act.name
+                            ),
+                            format!("[{l}, {h}]"),
+                        ));
+                    }
+                }
+            }
+            let limit = match (lo, hi) {
+                (None, None) => None,
+                (Some(l), Some(h)) => Some(TorqueLimit::from_range(l, h)),
+                (l, h) => Some(TorqueLimit::Range(l, h)),
+            };
+            out.push((
+                limit,
+                if limit.is_some() {
+                    source
+                } else {
+                    LimitSource::None
+                },
+            ));
+        }
+        Ok(ModelLimits {
+            limits: out,
+            shared,
+        })
+    }
 }
 
 /// A hand-form problem, built.
@@ -577,20 +694,28 @@ impl HandFile {
             });
         }
         let mut unlimited_joints = Vec::new();
+        let ModelLimits {
+            limits: limits_of,
+            shared,
+        } = robot.actuator_limits(&columns)?;
         let (torque_limits, limits_from) = match &self.torque_limits {
             None | Some(serde_json::Value::Null) => (None, "none"),
             Some(serde_json::Value::String(s)) if s == "model" && !columns.is_empty() => {
-                let limits: Vec<Option<TorqueLimit>> =
-                    columns.iter().map(|&a| robot.actuators[a].limit).collect();
-                for &a in &columns {
-                    let act = &robot.actuators[a];
-                    if act.limit.is_none() {
-                        unlimited_joints.push(act.name.clone());
+                let limits: Vec<Option<TorqueLimit>> = limits_of.iter().map(|l| l.0).collect();
+                for (&a, l) in columns.iter().zip(&limits_of) {
+                    if l.0.is_none() {
+                        unlimited_joints.push(robot.actuators[a].name.clone());
                     }
+                }
+                if !shared.is_empty() {
+                    warnings.push(format!(
+                        "torque_limits \"model\": the actuatorfrcrange of {} is not applied: it bounds the sum of several actuators' forces, or a spatial tendon's, not one actuator's",
+                        shared.join(", ")
+                    ));
                 }
                 if !unlimited_joints.is_empty() {
                     warnings.push(format!(
-                        "torque_limits \"model\": no forcerange, and no ctrlrange of a force actuator, for {}; unlimited",
+                        "torque_limits \"model\": no forcerange, no ctrlrange of a force actuator and no actuatorfrcrange of a joint it alone drives, for {}; unlimited",
                         unlimited_joints.join(", ")
                     ));
                 }
@@ -599,7 +724,7 @@ impl HandFile {
             Some(serde_json::Value::String(s)) if s == "model" => {
                 let limits: Vec<Option<TorqueLimit>> = rows
                     .iter()
-                    .map(|&k| robot.joints[robot.independent[k]].effort.map(TorqueLimit::Symmetric))
+                    .map(|&k| robot.joints[robot.independent[k]].effort)
                     .collect();
                 for (r, l) in limits.iter().enumerate() {
                     if l.is_none() {
@@ -608,7 +733,7 @@ impl HandFile {
                 }
                 if !unlimited_joints.is_empty() {
                     warnings.push(format!(
-                        "torque_limits \"model\": no positive <limit effort> for {}; unlimited",
+                        "torque_limits \"model\": no positive <limit effort> (URDF) or actuatorfrcrange (MJCF) for {}; unlimited",
                         unlimited_joints.join(", ")
                     ));
                 }
@@ -644,13 +769,11 @@ impl HandFile {
         .apply(&mut p)?;
         let actuator_limits = columns
             .iter()
-            .map(|&a| {
-                let act = &robot.actuators[a];
-                ActuatorLimit {
-                    actuator: act.name.clone(),
-                    limit: act.limit,
-                    source: act.limit_source,
-                }
+            .zip(limits_of)
+            .map(|(&a, (limit, source))| ActuatorLimit {
+                actuator: robot.actuators[a].name.clone(),
+                limit,
+                source,
             })
             .collect();
         moving.sort_unstable();

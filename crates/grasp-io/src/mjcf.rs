@@ -631,6 +631,7 @@ impl Tree {
         child: usize,
         range: Option<(f64, f64)>,
         reference: f64,
+        effort: Option<TorqueLimit>,
         line: u32,
     ) {
         self.joints.push(Joint {
@@ -640,7 +641,7 @@ impl Tree {
             axis,
             parent,
             child,
-            effort: None,
+            effort,
             lower: range.map(|r| r.0),
             upper: range.map(|r| r.1),
             mimic: None,
@@ -790,6 +791,10 @@ impl Ctx<'_> {
             let range = jv
                 .limits("", self.c.autolimits)?
                 .map(|(a, b)| (to_rad(a), to_rad(b)));
+            // (A force or torque: never in degrees.)
+            let effort = jv
+                .limits("actuatorfrc", self.c.autolimits)?
+                .map(|(lo, hi)| TorqueLimit::from_range(lo, hi));
             let child = t.add_link(format!("{name}/{jname}"), j.line);
             t.add_joint(
                 jname,
@@ -804,6 +809,7 @@ impl Ctx<'_> {
                 child,
                 range,
                 reference,
+                effort,
                 j.line,
             );
             at = child;
@@ -822,6 +828,7 @@ impl Ctx<'_> {
             link,
             None,
             0.0,
+            None,
             e.line,
         );
         let inertial = e.children.iter().find(|c| c.name == "inertial").map(|i| {
@@ -1371,6 +1378,14 @@ impl Robot {
                         }
                     };
                     springs.push((name.to_string(), e, k, rest));
+                }
+                // MuJoCo clamps the total actuator force on the tendon: not read.
+                if v.limits("actuatorfrc", c.autolimits)?.is_some() {
+                    t.warnings.push(format!(
+                        "{}: {}: tendon `{name}`'s actuatorfrcrange is not read: the actuators on it are limited by their own ranges only",
+                        r.files[e.file],
+                        r.at(e)
+                    ));
                 }
                 match e.name.as_str() {
                     "fixed" => {

@@ -99,8 +99,10 @@ pub struct Joint {
     pub parent: usize,
     /// Child link.
     pub child: usize,
-    /// `<limit effort>` when given, finite and positive: N·m or N.
-    pub effort: Option<f64>,
+    /// The joint's torque limit, N·m or N: a URDF's `<limit effort>` when given,
+    /// finite and positive (`|τ| ≤ effort`); an MJCF joint's `actuatorfrcrange` when
+    /// limited (MuJoCo clamps the total actuator force on the joint to it).
+    pub effort: Option<grasp_core::TorqueLimit>,
     /// `<limit lower>`, when the joint has a finite one.
     pub lower: Option<f64>,
     /// `<limit upper>`, when the joint has a finite one.
@@ -181,6 +183,10 @@ pub enum LimitSource {
     Ctrlrange,
     /// Neither applies: unlimited.
     None,
+    /// The `actuatorfrcrange` of a joint that this actuator alone drives, which MuJoCo
+    /// clamps the actuator's force on the joint to (`gear × u` within it), narrower
+    /// than the actuator's own range or the only one.
+    Actuatorfrcrange,
 }
 
 /// How an actuator's force moves the joints.
@@ -797,7 +803,10 @@ impl Robot {
             let lim = j.limit;
             // An effort of 0 (urdf-rs's default, and a common placeholder) or +inf is
             // no limit.
-            let effort = lim.effort.filter(|&e| e > 0.0 && e.is_finite());
+            let effort = lim
+                .effort
+                .filter(|&e| e > 0.0 && e.is_finite())
+                .map(grasp_core::TorqueLimit::Symmetric);
             let range = match (lim.lower, lim.upper) {
                 (Some(lo), Some(hi)) if kind != JointKind::Continuous && lo < hi => {
                     (Some(lo), Some(hi))

@@ -4,21 +4,24 @@
 //! generalise, and by mirroring a joint, which must mirror its range and its torque.
 #![cfg(all(feature = "active-set", feature = "clarabel"))]
 
+mod common;
+
+use common::run;
 use grasp_testkit::{synthetic_grasp, ModelMix, Rng, SynthSpec};
 use grasp_torque::file::ModelName;
-use grasp_torque::{
-    solve, Backend, Cones, GraspProblem, Solution, SolverConfig, Status, TorqueLimit, WarmStart,
-};
+use grasp_torque::{Backend, Cones, GraspProblem, Solution, Status, TorqueLimit};
 
-fn run(p: &GraspProblem, backend: Backend, cones: Cones) -> Solution {
-    let config = SolverConfig {
-        backend: Some(backend),
-        cones,
-        ..Default::default()
-    };
-    let qp = config.qp(p).unwrap();
-    let mut s = config.build(qp).unwrap();
-    solve(s.as_mut(), &p.wrench, &WarmStart::default()).unwrap()
+/// Native and Clarabel both answer, or neither does.
+fn same_status(at: &str, native: &Solution, clarabel: &Solution) {
+    assert_eq!(
+        native.status.has_answer(),
+        clarabel.status.has_answer(),
+        "{at}: native {:?} {:?}, Clarabel {:?} {:?}",
+        native.status,
+        native.reason,
+        clarabel.status,
+        clarabel.reason
+    );
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -77,6 +80,19 @@ fn ranges(tau: &[f64], rng: &mut Rng) -> Vec<Option<TorqueLimit>> {
         .collect()
 }
 
+/// Grasp `seed` with random ranges around its unlimited optimum (none if it has none),
+/// and the generator that drew them.
+fn limited(seed: u64, salt: u64) -> Option<(GraspProblem, Rng)> {
+    let mut p = grasp(seed);
+    let free = run(&p, Backend::ActiveSet, Cones::Linear);
+    if !free.is_optimal() {
+        return None;
+    }
+    let mut rng = Rng(seed ^ salt);
+    p.torque_limits = Some(ranges(&free.torque, &mut rng));
+    Some((p, rng))
+}
+
 /// How far `tau` is outside its limits, relative to the largest torque.
 fn outside(p: &GraspProblem, tau: &[f64]) -> f64 {
     let s = tau.iter().fold(f64::MIN_POSITIVE, |a, v| a.max(v.abs()));
@@ -116,35 +132,15 @@ fn on_a_bound(p: &GraspProblem, tau: &[f64]) -> usize {
 fn ranges_agree_with_clarabel_on_both_cone_kinds() {
     let (mut optimal, mut infeasible, mut bound, mut exact_optimal) = (0, 0, 0, 0);
     for seed in 0..240u64 {
-        let mut p = grasp(seed);
-        let free = run(&p, Backend::ActiveSet, Cones::Linear);
-        if !free.is_optimal() {
+        let Some((p, _)) = limited(seed, 0x7a6e) else {
             continue;
-        }
-        let mut rng = Rng(seed ^ 0x7a6e);
-        p.torque_limits = Some(ranges(&free.torque, &mut rng));
+        };
         let a = run(&p, Backend::ActiveSet, Cones::Linear);
         let b = run(&p, Backend::Clarabel, Cones::Linear);
-        assert_eq!(
-            a.status.has_answer(),
-            b.status.has_answer(),
-            "seed {seed}: native {:?} {:?}, Clarabel {:?} {:?}",
-            a.status,
-            a.reason,
-            b.status,
-            b.reason
-        );
+        same_status(&format!("seed {seed}"), &a, &b);
         let e = run(&p, Backend::ActiveSet, Cones::Exact);
         let c = run(&p, Backend::Clarabel, Cones::Exact);
-        assert_eq!(
-            e.status.has_answer(),
-            c.status.has_answer(),
-            "seed {seed} exact: native {:?} {:?}, Clarabel {:?} {:?}",
-            e.status,
-            e.reason,
-            c.status,
-            c.reason
-        );
+        same_status(&format!("seed {seed} exact"), &e, &c);
         if a.status.has_answer() {
             assert_eq!(a.status, Status::Optimal, "seed {seed}");
             optimal += 1;
@@ -224,13 +220,9 @@ fn a_symmetric_range_is_the_symmetric_limit() {
 fn mirroring_a_joint_mirrors_its_range() {
     let mut checked = 0;
     for seed in 0..60u64 {
-        let mut p = grasp(seed);
-        let free = run(&p, Backend::ActiveSet, Cones::Linear);
-        if !free.is_optimal() {
+        let Some((p, mut rng)) = limited(seed, 0x6d69) else {
             continue;
-        }
-        let mut rng = Rng(seed ^ 0x6d69);
-        p.torque_limits = Some(ranges(&free.torque, &mut rng));
+        };
         let j = rng.int(0, p.joints() - 1);
         let mut q = p.clone();
         for c in 0..q.jacobian_transpose.ncols() {
@@ -298,15 +290,7 @@ fn an_unloaded_grasp_with_a_range_that_excludes_zero() {
         for cones in [Cones::Linear, Cones::Exact] {
             let a = run(&p, Backend::ActiveSet, cones);
             let b = run(&p, Backend::Clarabel, cones);
-            assert_eq!(
-                a.status.has_answer(),
-                b.status.has_answer(),
-                "seed {seed} {cones:?}: {:?} {:?} / {:?} {:?}",
-                a.status,
-                a.reason,
-                b.status,
-                b.reason
-            );
+            same_status(&format!("seed {seed} {cones:?}"), &a, &b);
             if a.status.has_answer() {
                 assert_eq!(a.status, Status::Optimal);
                 assert!(sign * a.torque[j] >= lo * (1.0 - 1e-9), "seed {seed}");
