@@ -101,6 +101,17 @@ impl TorqueLimit {
         }
     }
 
+    /// `(lower, upper)`, an open side infinite.
+    #[inline]
+    pub fn bounds(self) -> (f64, f64) {
+        match self {
+            TorqueLimit::Symmetric(t) => (-t, t),
+            TorqueLimit::Range(lo, hi) => {
+                (lo.unwrap_or(f64::NEG_INFINITY), hi.unwrap_or(f64::INFINITY))
+            }
+        }
+    }
+
     /// The limit with both bounds scaled by `f > 0` (a change of torque unit).
     pub fn scaled(self, f: f64) -> Self {
         match self {

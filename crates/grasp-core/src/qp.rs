@@ -338,6 +338,9 @@ pub struct TorqueQp {
     pub hw: Matrix,
     /// What each row stands for.
     pub rows: Vec<RowId>,
+    /// Each limited torque's `(index, lower, upper)`, an open side infinite: what the
+    /// residual check reads.
+    limits: Vec<(usize, f64, f64)>,
 }
 
 /// The rows of one contact: `(S_c, fmin row last)`.
@@ -539,6 +542,12 @@ impl TorqueQp {
         }
         Self {
             h: OnceLock::new(),
+            limits: model
+                .torque_limits
+                .iter()
+                .enumerate()
+                .filter_map(|(j, l)| l.map(|l| (j, l.bounds().0, l.bounds().1)))
+                .collect(),
             hp,
             hw,
             c0,
@@ -547,6 +556,11 @@ impl TorqueQp {
             constraints,
             model,
         }
+    }
+
+    /// Each limited torque's `(index, lower, upper)`, an open side infinite.
+    pub fn limits(&self) -> &[(usize, f64, f64)] {
+        &self.limits
     }
 
     /// H = S Z2, R × m (eqs. 39, 43), formed on the first call.

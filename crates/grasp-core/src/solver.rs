@@ -651,17 +651,21 @@ impl TorqueQp {
     /// out of the solver's linear algebra with an error relative to the largest torque,
     /// which joins the terms: a bound at 0 (a tendon that only pulls) has no other.
     fn limit_violation(&self, tau: &[f64], tol: f64) -> (f64, bool) {
-        let (mut viol, mut bad) = (f64::NEG_INFINITY, false);
-        let scale = norm_inf(tau);
-        for (&t, lim) in tau.iter().zip(&self.model.torque_limits) {
-            let Some(lim) = *lim else { continue };
-            let lower = lim.lower().map(|lo| (lo - t, lo));
-            let upper = lim.upper().map(|hi| (t - hi, hi));
-            for (v, b) in lower.into_iter().chain(upper) {
-                viol = viol.max(v);
-                bad |= exceeds(v, tol * (b.abs() + t.abs() + scale));
-            }
+        // (An open side is infinite: never violated, its bound infinite. A NaN torque
+        // is the caller's finiteness check's.)
+        let mut viol = f64::NEG_INFINITY;
+        for &(j, lo, hi) in self.limits() {
+            viol = viol.max(lo - tau[j]).max(tau[j] - hi);
         }
+        if viol <= 0.0 {
+            return (viol, false);
+        }
+        let scale = norm_inf(tau);
+        let bad = self.limits().iter().any(|&(j, lo, hi)| {
+            let t = tau[j];
+            let terms = t.abs() + scale;
+            exceeds(lo - t, tol * (lo.abs() + terms)) || exceeds(t - hi, tol * (hi.abs() + terms))
+        });
         (viol, bad)
     }
 
