@@ -600,6 +600,7 @@ HandArrays = namedtuple(
         "errors",
         "passive_torque",
         "object_wrench",
+        "torque_limits",
     ],
 )
 HandArrays.__doc__ = """What ``Hand.arrays`` builds: ``G[B,6,n]`` and ``JT[B,m,n]`` per grasp
@@ -611,7 +612,10 @@ each configuration (MuJoCo's ``qfrc_spring``), plus the links' weight with
 ``gravity``; zero for a hand without either. ``solve_batch`` takes it as
 ``passive_torque`` to solve what ``Hand.solve_batch`` solves. ``object_wrench[B,6]``,
 with ``object_mass``: what the object's weight asks of the contacts, in the object
-frame (add it to the wrenches), else None."""
+frame (add it to the wrenches), else None. ``torque_limits[a|m, 2]``: the model's
+limits (``torque_limits="model"``: URDF efforts, MJCF force ranges) on T's columns, or
+JT's rows without T, as ``[lower, upper]`` rows with ``∓inf`` where open; ``solve_batch``
+takes it as ``torque_limits``."""
 
 
 def _object(object_mass, center_of_mass) -> Optional[dict]:
@@ -752,8 +756,9 @@ class Hand:
         q, P, N, pose = self._poses(joint_positions, positions, normals, object_pose)
         g, rows = _gravity(gravity, q.shape[0])
         held = _object(object_mass, center_of_mass)
-        spec_json = _dumps({"contacts": _contacts(contacts), "gravity": g, "object": held})
-        d = json.loads(self._native.describe(spec_json))
+        spec = {"contacts": _contacts(contacts), "gravity": g, "object": held}
+        spec_json = _dumps(spec)
+        d = json.loads(self._native.describe(_dumps(dict(spec, torque_limits="model"))))
         B, n, m = q.shape[0], d["force_dim"], len(d["joint_names"])
         G = np.empty((B, 6, n))
         JT = np.empty((B, m, n))
@@ -763,7 +768,13 @@ class Hand:
         OW = None if held is None else np.empty((B, 6))
         errors = self._native.arrays(q, P, N, pose, rows, spec_json, G, JT, TP, T3, OW)
         T = T if T3 is None else T3
-        return HandArrays(G, JT, T, d["joint_names"], d["actuator_names"], dict(errors), TP, OW)
+        limits = np.full((len(d["torque_limits"]), 2), [-np.inf, np.inf])
+        for j, lim in enumerate(d["torque_limits"]):
+            if isinstance(lim, list):
+                limits[j] = [-np.inf if lim[0] is None else lim[0], np.inf if lim[1] is None else lim[1]]
+            elif lim is not None:
+                limits[j] = [-lim, lim]
+        return HandArrays(G, JT, T, d["joint_names"], d["actuator_names"], dict(errors), TP, OW, limits)
 
     def solve_batch(
         self,

@@ -1095,6 +1095,7 @@ impl Hand {
             }),
             "force_dim": t.contacts.iter().map(|c| c.dim()).sum::<usize>(),
             "transmission_varies": grasps.transmission_varies(),
+            "torque_limits": t.torque_limits,
         });
         Ok(value.to_string())
     }

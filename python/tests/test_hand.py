@@ -199,7 +199,12 @@ def test_arrays_are_the_hand_forms_matrices_and_solve_as_the_hand_batch(name):
         kw = dict(transmission=a.transmission, actuator_names=a.actuator_names)
         assert direct.names == a.actuator_names
     if limits == "model":
-        kw["torque_limits"] = gt.Problem.from_dict(as_dict(d, hand, q[0], pose=pose)).to_dict()["torque_limits"]
+        # The model's limits as the hand form takes them, as rows [lower, upper].
+        one = gt.Problem.from_dict(as_dict(d, hand, q[0], pose=pose)).to_dict()["torque_limits"]
+        want = [[-l, l] if isinstance(l, float) else l or [None, None] for l in one]
+        want = np.array([[-np.inf if lo is None else lo, np.inf if hi is None else hi] for lo, hi in want])
+        np.testing.assert_array_equal(a.torque_limits, want)
+        kw["torque_limits"] = a.torque_limits
     via = gt.solve_batch(a.G[ok], a.JT[ok], W[ok], models, **kw)
     np.testing.assert_array_equal(via.status, direct.status)
     np.testing.assert_array_equal(via.objective, direct.objective)

@@ -18,7 +18,7 @@
 
 use grasp_torque::{
     matrix::Matrix, solve, Backend, Cones, ContactModel, GraspProblem, GraspSolver, Solution,
-    SolverConfig, WarmStart,
+    SolverConfig, TorqueLimit, WarmStart,
 };
 use proptest::prelude::*;
 
@@ -106,6 +106,19 @@ fn check_answer(p: &GraspProblem, backend: Backend, cones: Cones, wrench: &[f64;
         .chain(&s.contact_forces)
         .all(|v| v.is_finite()));
     if s.is_optimal() {
+        // Every torque within its limits, against the limit and the largest torque.
+        let tmax = s.torque.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        for (j, l) in p.torque_limits.iter().flatten().enumerate() {
+            let (Some(l), Some(&t)) = (l, s.torque.get(j)) else {
+                continue;
+            };
+            let (lo, hi) = l.bounds();
+            let out = (lo - t).max(t - hi);
+            assert!(
+                out <= 1e-6 * (lo.abs().min(hi.abs()) + tmax),
+                "{backend}/{cones}: τ_{j} = {t} outside {l:?}"
+            );
+        }
         // Recompute ‖G f − w‖ from scratch, relative to the problem's scale: the
         // largest contact force (mz as mz/mu_torsion) seen through the row.
         let g = &p.grasp_matrix;
@@ -216,6 +229,22 @@ proptest! {
         let w = [next() * scale, next() * scale, next() * scale, next(), next(), next()];
         let mut p = GraspProblem::new(g, jt, w, contacts);
         p.linearization.sides = 4 + (seed % 8) as usize;
+        if seed % 3 == 0 {
+            // Torque limits of every form over six decades: |τ| ≤ t, [lo, hi] of
+            // either sign or excluding 0, one side open.
+            p.torque_limits = Some((0..joints).map(|_| {
+                let s = 10f64.powi((next() * 3.0) as i32);
+                let (a, b) = (next() * s, next() * s);
+                let (lo, hi) = (a.min(b), a.max(b));
+                match (next() * 5.0) as i32 {
+                    0 => None,
+                    1 => Some(TorqueLimit::Symmetric(hi.abs().max(1e-3))),
+                    2 => Some(TorqueLimit::Range(Some(lo), None)),
+                    3 => Some(TorqueLimit::Range(None, Some(hi))),
+                    _ => Some(TorqueLimit::Range(Some(lo), Some(hi))),
+                }
+            }).collect());
+        }
         if p.validate().is_ok() {
             check_solves(&p);
             // A cold solve through the trait object as well.
