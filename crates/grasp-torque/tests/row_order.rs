@@ -8,7 +8,7 @@
 
 use grasp_testkit::{synthetic_grasp, ModelMix, Rng, SynthSpec};
 use grasp_torque::file::ModelName;
-use grasp_torque::{Backend, Cones, GraspProblem, Matrix, Solution};
+use grasp_torque::{Backend, Cones, GraspProblem, Matrix, Solution, TorqueLimit};
 use proptest::prelude::*;
 
 mod common;
@@ -38,9 +38,19 @@ fn grasp(seed: u64, null_space: bool) -> GraspProblem {
     let mut rng = Rng(seed ^ 0x5eed);
     let m = p.joints();
     p.torque_weights = Some((0..m).map(|_| rng.uniform(0.5, 4.0)).collect());
+    // Symmetric limits on every fourth joint, ranges of both signs or one side open
+    // on the others but one in four.
     p.torque_limits = Some(
         (0..m)
-            .map(|j| (j % 2 == 0).then(|| rng.uniform(0.5, 3.0).into()))
+            .map(|j| match j % 4 {
+                0 => Some(rng.uniform(0.5, 3.0).into()),
+                1 => Some(TorqueLimit::Range(
+                    Some(-rng.uniform(0.2, 1.0)),
+                    Some(rng.uniform(1.0, 3.0)),
+                )),
+                2 => Some(TorqueLimit::Range(None, Some(rng.uniform(0.5, 3.0)))),
+                _ => None,
+            })
             .collect(),
     );
     p.min_normal_force = Some(

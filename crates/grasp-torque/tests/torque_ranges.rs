@@ -125,13 +125,19 @@ fn on_a_bound(p: &GraspProblem, tau: &[f64]) -> usize {
         .count()
 }
 
-/// 240 grasps with random ranges: the native solver and Clarabel agree on the status
-/// and σ, on the inscribed cones (N = 8) and on the exact cones; every answer holds
-/// its limits; the exact σ* is not above σ(8). Most answers hold a joint on a bound.
+/// 240 grasps with random ranges (`GRASP_RANGE_CASES` for more: 30 000 agreed, 13 061
+/// optimal at N = 8, 14 004 infeasible): the native solver and Clarabel agree on the
+/// status and σ, on the inscribed cones (N = 8) and on the exact cones; every answer
+/// holds its limits; the exact σ* is not above σ(8). Most answers hold a joint on a
+/// bound.
 #[test]
 fn ranges_agree_with_clarabel_on_both_cone_kinds() {
     let (mut optimal, mut infeasible, mut bound, mut exact_optimal) = (0, 0, 0, 0);
-    for seed in 0..240u64 {
+    let n: u64 = std::env::var("GRASP_RANGE_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(240);
+    for seed in 0..n {
         let Some((p, _)) = limited(seed, 0x7a6e) else {
             continue;
         };
