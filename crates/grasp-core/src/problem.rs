@@ -194,11 +194,19 @@ impl<'de> serde::Deserialize<'de> for TorqueLimit {
                 self,
                 mut a: A,
             ) -> Result<TorqueLimit, A::Error> {
-                let wrong = || serde::de::Error::custom(format!("expected {LIMIT_EXPECTED}"));
-                let lo: Option<f64> = a.next_element()?.ok_or_else(wrong)?;
-                let hi: Option<f64> = a.next_element()?.ok_or_else(wrong)?;
-                if a.next_element::<serde::de::IgnoredAny>()?.is_some() {
-                    return Err(wrong());
+                let wrong = |n: usize| {
+                    serde::de::Error::custom(format!(
+                        "expected {LIMIT_EXPECTED}, got a list of {n}"
+                    ))
+                };
+                let lo: Option<f64> = a.next_element()?.ok_or_else(|| wrong(0))?;
+                let hi: Option<f64> = a.next_element()?.ok_or_else(|| wrong(1))?;
+                let mut n = 2;
+                while a.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    n += 1;
+                }
+                if n > 2 {
+                    return Err(wrong(n));
                 }
                 Ok(TorqueLimit::Range(lo, hi))
             }

@@ -363,8 +363,8 @@ fn ranges_in_files_are_read_and_checked() {
         ),
         (
             "[null, null, [1, 2, 3], null]",
-            "torque_limits",
-            "[lower, upper]",
+            "torque_limits[2]",
+            "got a list of 3",
         ),
         (
             "[null, null, [\"a\", 2], null]",
