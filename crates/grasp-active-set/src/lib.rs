@@ -864,13 +864,13 @@ struct Iter<'s> {
 
 impl<'s> Iter<'s> {
     fn new(s: &'s mut Engine) -> Self {
-        // Unloaded, with a torque limit that excludes τ = 0 (a range that does not hold
-        // 0), the limits set the scale.
-        let mut scale = norm_inf(&s.ws.b[..s.scale_rows]);
-        if scale == 0.0 && s.ws.b[s.scale_rows..].iter().any(|&v| v > 0.0) {
-            scale = norm_inf(&s.ws.b[s.scale_rows..]);
-        }
-        let scale = scale.max(f64::MIN_POSITIVE);
+        // A torque limit that y = 0 breaks (a range that excludes 0, or passive torques
+        // beyond a limit) says how large the answer is; one that it meets does not.
+        let scale = s.ws.b[s.scale_rows..]
+            .iter()
+            .filter(|&&v| v > 0.0)
+            .fold(norm_inf(&s.ws.b[..s.scale_rows]), |a, &v| a.max(v))
+            .max(f64::MIN_POSITIVE);
         let penalty = s.settings.elastic_penalty * scale.max(1e-12);
         Self {
             s,

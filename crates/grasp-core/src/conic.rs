@@ -383,22 +383,23 @@ impl ConicForm {
     }
 
     /// `b(w)` into `out`; returns its magnitude α = ‖b(w)‖∞ over every row but the
-    /// torque limits' (unless that is 0 and a limit excludes τ = 0: then over the
-    /// limits' rows), by which `out` is then divided (unless it is 0: every row
-    /// homogeneous, τ = 0 optimal). A loose limit (1e6 times the torques) set the scale
+    /// torque limits' that x = 0 meets, by which `out` is then divided (unless it is 0:
+    /// every row homogeneous, τ = 0 optimal). A loose limit (1e6 times the torques) set the scale
     /// before, and every other row then sat at 1e-6 of it, below the solvers'
     /// tolerances.
     pub fn b_into(&self, w: &[f64; 6], out: &mut [f64]) -> f64 {
         out.copy_from_slice(&self.b0);
         add_columns(out, &self.bw_cols, w, 1.0);
         let (head, tail) = (&out[..self.limit_rows.start], &out[self.limit_rows.end..]);
-        let mut alpha = head.iter().chain(tail).fold(0.0f64, |a, v| a.max(v.abs()));
-        // Unloaded, x = 0 is the answer unless a torque limit excludes it (a range
-        // that does not hold 0): then the limits set the scale.
-        let limits = &out[self.limit_rows.clone()];
-        if alpha == 0.0 && limits.iter().any(|&v| v < 0.0) {
-            alpha = limits.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        }
+        // A limit that x = 0 breaks (b < 0: a range that excludes 0, or passive torques
+        // beyond a limit) says how large the answer is; one that it meets does not.
+        let alpha = out[self.limit_rows.clone()]
+            .iter()
+            .filter(|&&v| v < 0.0)
+            .fold(
+                head.iter().chain(tail).fold(0.0f64, |a, v| a.max(v.abs())),
+                |a, &v| a.max(-v),
+            );
         if alpha > 0.0 {
             let inv = 1.0 / alpha;
             out.iter_mut().for_each(|v| *v *= inv);
