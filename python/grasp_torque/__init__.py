@@ -36,10 +36,10 @@ import math
 import numbers
 import os
 import re
-from collections import namedtuple
-from typing import Any, Iterable, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, Iterable, List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from . import _native
 
@@ -56,9 +56,30 @@ __all__ = [
     "INVALID",
     "backends",
     "synthetic_grasps",
+    "Array",
+    "BatchErrors",
+    "Contacts",
+    "MinNormalForce",
+    "ProblemLike",
+    "TorqueLimits",
 ]
 
 __version__ = _native.VERSION
+
+#: A float64 array, as every output is.
+Array = NDArray[np.float64]
+#: Contact dicts, one per contact: ``{"model": "pcwf", "mu": 0.5}``, and for a hand a
+#: ``link`` or ``site``.
+Contacts = Sequence[Mapping[str, Any]]
+#: Per joint (or actuator) a number t (``|τ| ≤ t``), ``[lower, upper]`` (``None`` or
+#: ``∓inf`` for an open side) or ``None`` / ``inf`` for none; an ``[m, 2]`` array; or,
+#: for a hand, ``"model"`` (the file's limits).
+TorqueLimits = Union[str, ArrayLike, Sequence[Union[None, float, Sequence[Optional[float]]]]]
+#: One number for every contact, or one per contact.
+MinNormalForce = Union[float, Sequence[float]]
+#: A batch's ``errors``: the item (``b``, or ``(b, k)`` with K wrenches per grasp) and
+#: why it was rejected.
+BatchErrors = Dict[Union[int, Tuple[int, int]], str]
 
 Result = _native.Result
 
@@ -73,7 +94,7 @@ STATUS_CODES = {
 INVALID = _native.INVALID
 
 
-def backends() -> list:
+def backends() -> List[str]:
     """The backends compiled into this build (``active-set``, ``clarabel``)."""
     return list(_native.backends())
 
@@ -87,7 +108,7 @@ def _plain(o: Any) -> Any:
     raise TypeError(f"{type(o).__name__} is not JSON serialisable")
 
 
-def _non_finite(obj: Any, path: str = ""):
+def _non_finite(obj: Any, path: str = "") -> Optional[Tuple[str, Any]]:
     """The path (``contacts[0].mu``, ``grasp_matrix[1][2]``, as the Rust side names
     fields) and value of the first number in ``obj`` that is not finite, or None."""
     if hasattr(obj, "tolist"):
@@ -120,7 +141,7 @@ def _dumps(obj: Any) -> str:
         raise ValueError(f"{path}: expected a finite number, got {value}") from None
 
 
-def _real(name: str, a: Any) -> np.ndarray:
+def _real(name: str, a: Any) -> Array:
     """``a`` as a C-contiguous float64 array. What is not real numbers is refused by
     name: numpy would drop an imaginary part with a warning, read strings as numbers,
     or fail on a ragged list without saying which argument."""
@@ -143,12 +164,12 @@ def _count(name: str, v: Any, least: int, most: Optional[int] = None) -> int:
     """A whole number from ``least`` to ``most``, or a ``ValueError`` naming ``name``."""
     if isinstance(v, bool) or not isinstance(v, numbers.Integral):
         raise ValueError(f"{name}: expected a whole number, got {v!r}")
-    v = int(v)
-    if v < least:
-        raise ValueError(f"{name}: expected at least {least}, got {v}")
-    if most is not None and v > most:
-        raise ValueError(f"{name}: expected at most {most}, got {v}")
-    return v
+    n = int(v)
+    if n < least:
+        raise ValueError(f"{name}: expected at least {least}, got {n}")
+    if most is not None and n > most:
+        raise ValueError(f"{name}: expected at most {most}, got {n}")
+    return n
 
 
 def _limits(limits: Any) -> Any:
@@ -173,7 +194,7 @@ def _limits(limits: Any) -> Any:
     return [one(v) for v in limits]
 
 
-def _gravity(gravity: Any, B: int):
+def _gravity(gravity: Any, B: int) -> Tuple[Any, Optional[Array]]:
     """``gravity`` as the hand form's value and, when given per grasp (``[B, 3]``), the
     rows: ``(None | "model" | [gx, gy, gz], None | ndarray[B, 3])``. Per grasp, the
     hand form gets a zero vector, so that the masses are checked once for the batch."""
@@ -189,7 +210,7 @@ def _gravity(gravity: Any, B: int):
     )
 
 
-def _contacts(contacts: Any) -> list:
+def _contacts(contacts: Any) -> List[Mapping[str, Any]]:
     """The contact list, one dict per contact."""
     if isinstance(contacts, (Mapping, str, bytes)) or not isinstance(contacts, Iterable):
         raise ValueError(
@@ -215,7 +236,7 @@ class Problem:
         self._p = native
 
     @classmethod
-    def load(cls, path: Union[str, os.PathLike]) -> "Problem":
+    def load(cls, path: Union[str, "os.PathLike[str]"]) -> "Problem":
         path = os.fspath(path)
         try:
             with open(path, encoding="utf-8") as f:
@@ -228,7 +249,7 @@ class Problem:
             raise ValueError(f"{path}: {e}") from None
 
     @classmethod
-    def from_dict(cls, d: Mapping, base: Union[str, os.PathLike] = ".") -> "Problem":
+    def from_dict(cls, d: Mapping[str, Any], base: Union[str, "os.PathLike[str]"] = ".") -> "Problem":
         """A problem from a dict in any JSON form; a hand's relative ``model`` path is
         taken relative to ``base``."""
         try:
@@ -240,10 +261,10 @@ class Problem:
     @classmethod
     def from_arrays(
         cls,
-        grasp_matrix,
-        jacobian_transpose,
-        contacts: Sequence[Mapping],
-        wrench=None,
+        grasp_matrix: ArrayLike,
+        jacobian_transpose: ArrayLike,
+        contacts: Contacts,
+        wrench: Optional[ArrayLike] = None,
         **options: Any,
     ) -> "Problem":
         """A matrix-form problem: G (6 × n), Jᵀ (m × n), one contact dict per contact
@@ -265,29 +286,58 @@ class Problem:
             d["torque_limits"] = _limits(d["torque_limits"])
         return cls.from_dict(d)
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> Dict[str, Any]:
         """The problem in matrix form (what ``grasp-torque build`` prints)."""
-        return json.loads(self._p.to_json())
+        d: Dict[str, Any] = json.loads(self._p.to_json())
+        return d
 
     @property
-    def hand(self) -> Optional[dict]:
+    def hand(self) -> Optional[Dict[str, Any]]:
         """For the hand form: the robot, defaulted joints, limits source, warnings."""
         h = self._p.hand_json()
         return None if h is None else json.loads(h)
 
-    joints = property(lambda self: self._p.joints, doc="m, the number of joints.")
-    force_dim = property(lambda self: self._p.force_dim, doc="n, contact force components.")
-    contacts = property(lambda self: self._p.contacts, doc="The number of contacts.")
-    joint_names = property(lambda self: self._p.joint_names, doc="Names, or None.")
-    wrench = property(lambda self: self._p.wrench, doc="The problem's wrench w.")
-    grasp_matrix = property(lambda self: self._p.grasp_matrix, doc="G, 6 × n.")
-    jacobian_transpose = property(lambda self: self._p.jacobian_transpose, doc="Jᵀ, m × n.")
-    passive_torque = property(
-        lambda self: self._p.passive_torque,
-        doc="τ_p per joint (a hand's springs and, with gravity, its links' weight), or None.",
-    )
+    @property
+    def joints(self) -> int:
+        """m, the number of joints."""
+        return self._p.joints
 
-    def __reduce__(self):
+    @property
+    def force_dim(self) -> int:
+        """n, contact force components."""
+        return self._p.force_dim
+
+    @property
+    def contacts(self) -> int:
+        """The number of contacts."""
+        return self._p.contacts
+
+    @property
+    def joint_names(self) -> Optional[List[str]]:
+        """Names, or None."""
+        return self._p.joint_names
+
+    @property
+    def wrench(self) -> Array:
+        """The problem's wrench w."""
+        return self._p.wrench
+
+    @property
+    def grasp_matrix(self) -> Array:
+        """G, 6 × n."""
+        return self._p.grasp_matrix
+
+    @property
+    def jacobian_transpose(self) -> Array:
+        """Jᵀ, m × n."""
+        return self._p.jacobian_transpose
+
+    @property
+    def passive_torque(self) -> Optional[Array]:
+        """τ_p per joint (a hand's springs and, with gravity, its links' weight), or None."""
+        return self._p.passive_torque
+
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
         hand = self._p.hand_json()
         return (_problem_from_json, (self._p.to_json(), hand))
 
@@ -299,7 +349,7 @@ def _problem_from_json(text: str, hand: Optional[str] = None) -> Problem:
     return Problem(_native.Problem.from_json(text, ".", hand))
 
 
-def _as_problem(problem: Any) -> Problem:
+def _as_problem(problem: "ProblemLike") -> Problem:
     if isinstance(problem, Problem):
         return problem
     if isinstance(problem, (str, os.PathLike)):
@@ -311,7 +361,15 @@ def _as_problem(problem: Any) -> Problem:
     )
 
 
-def _settings(backend, cones, sides, latitudes, sfce_spacing, internal_forces, paper_model) -> dict:
+def _settings(
+    backend: Optional[str],
+    cones: str,
+    sides: Optional[int],
+    latitudes: Optional[int],
+    sfce_spacing: Optional[str],
+    internal_forces: Optional[str],
+    paper_model: bool,
+) -> Dict[str, Any]:
     """The solver keywords, as the Rust side reads them (the CLI's flags)."""
     return {
         "backend": backend,
@@ -349,7 +407,7 @@ class Solver:
 
     def __init__(
         self,
-        problem: Any,
+        problem: "ProblemLike",
         backend: Optional[str] = None,
         cones: str = "linear",
         sides: Optional[int] = None,
@@ -364,15 +422,13 @@ class Solver:
         self._settings = settings
         self._s = _native.Solver(_as_problem(problem)._p, _dumps(settings))
 
-    def solve(self, wrench=None, warm: bool = True) -> Result:
-        if wrench is not None:
-            w = _real("wrench", wrench).reshape(-1)
-            if w.shape != (6,):
-                raise ValueError(
-                    f"wrench: expected 6 numbers [Fx, Fy, Fz, Mx, My, Mz], got {w.size}"
-                )
-            wrench = w.tolist()
-        return self._s.solve(wrench, warm)
+    def solve(self, wrench: Optional[ArrayLike] = None, warm: bool = True) -> Result:
+        if wrench is None:
+            return self._s.solve(None, warm)
+        w = _real("wrench", wrench).reshape(-1)
+        if w.shape != (6,):
+            raise ValueError(f"wrench: expected 6 numbers [Fx, Fy, Fz, Mx, My, Mz], got {w.size}")
+        return self._s.solve(w.tolist(), warm)
 
     def diagnose(self) -> Result:
         """The last answer with what ``check="lazy"`` deferred: forces, residuals and
@@ -388,7 +444,7 @@ class Solver:
     def backend(self) -> str:
         return self._s.backend
 
-    def __reduce__(self):
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
         return (_solver_from_state, (self.problem, self._settings))
 
     def __repr__(self) -> str:
@@ -396,23 +452,33 @@ class Solver:
         return f"Solver(backend={self.backend!r}, cones={s['cones']!r}, problem={self.problem!r})"
 
 
-def _solver_from_state(problem: Problem, settings: dict) -> Solver:
+def _solver_from_state(problem: Problem, settings: Dict[str, Any]) -> Solver:
     return Solver(problem, **settings)
 
 
-BatchResult = namedtuple(
-    "BatchResult",
-    ["torque", "objective", "wrench_residual", "status", "errors", "contact_forces"],
-    defaults=(None,),
-)
-BatchResult.__doc__ = """Arrays of a batch: ``torque[B,(K,)m]``, ``objective[B,(K)]``,
-``wrench_residual[B,(K)]`` (``‖G f − w‖∞``), ``status[B,(K)]`` (int8 codes, see
-``STATUS_CODES``), ``errors``: ``{(grasp, wrench): message}`` for invalid items, and
-with ``contact_forces=True`` the forces ``f[B,(K,)n]`` in G's column order (each
-contact's components in its frame; NaN without an answer), else None."""
+#: A problem, a path to a problem file, or a dict in any of the JSON forms.
+ProblemLike = Union[Problem, str, "os.PathLike[str]", Mapping[str, Any]]
 
 
-def _out(name: str, given, shape, dtype):
+class BatchResult(NamedTuple):
+    """Arrays of a batch: ``torque[B,(K,)m]``, ``objective[B,(K)]``,
+    ``wrench_residual[B,(K)]`` (``‖G f − w‖∞``), ``status[B,(K)]`` (int8 codes, see
+    ``STATUS_CODES``), ``errors``: ``{(grasp, wrench): message}`` for invalid items, and
+    with ``contact_forces=True`` the forces ``f[B,(K,)n]`` in G's column order (each
+    contact's components in its frame; NaN without an answer), else None."""
+
+    torque: Array
+    objective: Array
+    wrench_residual: Array
+    status: NDArray[np.int8]
+    errors: BatchErrors
+    contact_forces: Optional[Array] = None
+
+
+_Outputs = Tuple[Array, Array, Array, NDArray[np.int8]]
+
+
+def _out(name: str, given: Optional[NDArray[Any]], shape: Tuple[int, ...], dtype: Any) -> NDArray[Any]:
     if given is None:
         return np.empty(shape, dtype=dtype)
     if not isinstance(given, np.ndarray) or given.dtype != dtype:
@@ -424,7 +490,7 @@ def _out(name: str, given, shape, dtype):
     return given
 
 
-def _wrenches(W: np.ndarray):
+def _wrenches(W: Array) -> Tuple[Array, bool]:
     """``W`` as ``[B, K, 6]``, and whether it was ``[B, 6]``."""
     if W.ndim == 2:
         return W.reshape(W.shape[0], 1, W.shape[1]), True
@@ -433,7 +499,14 @@ def _wrenches(W: np.ndarray):
     raise ValueError(f"W: expected shape (B, 6) or (B, K, 6), got {W.shape}")
 
 
-def _outputs(lead, m, torque, objective, wrench_residual, status):
+def _outputs(
+    lead: Tuple[int, ...],
+    m: int,
+    torque: Optional[Array],
+    objective: Optional[Array],
+    wrench_residual: Optional[Array],
+    status: Optional[NDArray[np.int8]],
+) -> _Outputs:
     """A batch's four outputs, given (checked) or new."""
     return (
         _out("torque", torque, lead + (m,), np.float64),
@@ -443,7 +516,7 @@ def _outputs(lead, m, torque, objective, wrench_residual, status):
     )
 
 
-def _flat(outs, B, K, m):
+def _flat(outs: _Outputs, B: int, K: int, m: int) -> _Outputs:
     """The outputs as the native batch writes them: ``[B, K, m]`` and ``[B, K]`` views."""
     torque, objective, wrench_residual, status = outs
     return (
@@ -454,29 +527,29 @@ def _flat(outs, B, K, m):
     )
 
 
-def _forces(given, lead, n):
+def _forces(given: Union[bool, Array, None], lead: Tuple[int, ...], n: int) -> Optional[Array]:
     """The contact forces' output: None unless asked for (True, or an array)."""
-    if given is None or given is False:
-        return None
-    return _out("contact_forces", None if given is True else given, lead + (n,), np.float64)
+    if given is None or isinstance(given, bool):
+        return _out("contact_forces", None, lead + (n,), np.float64) if given else None
+    return _out("contact_forces", given, lead + (n,), np.float64)
 
 
-def _threads(threads) -> int:
+def _threads(threads: Optional[int]) -> int:
     if threads is None:
         return _native.default_threads()
     return _count("threads", threads, 1, _native.MAX_THREADS)
 
 
-def _errors(errors, single: bool) -> dict:
+def _errors(errors: Sequence[Tuple[int, int, str]], single: bool) -> BatchErrors:
     """``{b: message}`` for one wrench per grasp, else ``{(b, k): message}``."""
     return {g if single else (g, k): msg for g, k, msg in errors}
 
 
 def solve_batch(
-    G,
-    JT,
-    W,
-    contacts: Sequence[Mapping],
+    G: ArrayLike,
+    JT: ArrayLike,
+    W: ArrayLike,
+    contacts: Contacts,
     *,
     backend: Optional[str] = None,
     cones: str = "linear",
@@ -485,20 +558,20 @@ def solve_batch(
     sfce_spacing: Optional[str] = None,
     internal_forces: Optional[str] = None,
     paper_model: bool = False,
-    torque_weights=None,
-    torque_limits=None,
-    min_normal_force=None,
+    torque_weights: Optional[ArrayLike] = None,
+    torque_limits: Optional[TorqueLimits] = None,
+    min_normal_force: Optional[MinNormalForce] = None,
     joint_names: Optional[Sequence[str]] = None,
-    transmission=None,
+    transmission: Optional[ArrayLike] = None,
     actuator_names: Optional[Sequence[str]] = None,
-    passive_torque=None,
+    passive_torque: Optional[ArrayLike] = None,
     threads: Optional[int] = None,
     warm_start: bool = True,
-    torque: Optional[np.ndarray] = None,
-    objective: Optional[np.ndarray] = None,
-    wrench_residual: Optional[np.ndarray] = None,
-    status: Optional[np.ndarray] = None,
-    contact_forces=False,
+    torque: Optional[Array] = None,
+    objective: Optional[Array] = None,
+    wrench_residual: Optional[Array] = None,
+    status: Optional[NDArray[np.int8]] = None,
+    contact_forces: Union[bool, Array] = False,
 ) -> BatchResult:
     """Solves B grasps, each for one or K wrenches, in parallel, with the GIL released.
 
@@ -522,103 +595,103 @@ def solve_batch(
     arguments that make the whole batch impossible (shapes, contacts, options) raise
     ``ValueError``.
     """
-    G, JT, W = _real("G", G), _real("JT", JT), _real("W", W)
-    if G.ndim != 3:
-        raise ValueError(f"G: expected shape (B, 6, n), got {G.shape}")
-    if JT.ndim != 3:
-        raise ValueError(f"JT: expected shape (B, m, n), got {JT.shape}")
-    W3, single = _wrenches(W)
-    B, K, m = G.shape[0], W3.shape[1], JT.shape[1]
-    per_grasp = None
+    g, jt = _real("G", G), _real("JT", JT)
+    if g.ndim != 3:
+        raise ValueError(f"G: expected shape (B, 6, n), got {g.shape}")
+    if jt.ndim != 3:
+        raise ValueError(f"JT: expected shape (B, m, n), got {jt.shape}")
+    W3, single = _wrenches(_real("W", W))
+    B, K, m = g.shape[0], W3.shape[1], jt.shape[1]
+    shared, per_grasp = None, None
     if transmission is not None:
-        transmission = _real("transmission", transmission)
-        shared = transmission.ndim == 2 and transmission.shape[0] == m
-        if not shared and not (transmission.ndim == 3 and transmission.shape[:2] == (B, m)):
+        T = _real("transmission", transmission)
+        if T.ndim == 2 and T.shape[0] == m:
+            shared = T
+        elif T.ndim == 3 and T.shape[:2] == (B, m):
+            per_grasp = T
+        else:
             raise ValueError(
-                f"transmission: expected shape ({m}, a) or ({B}, {m}, a), one row per joint of JT, got {transmission.shape}"
+                f"transmission: expected shape ({m}, a) or ({B}, {m}, a), one row per joint of JT, got {T.shape}"
             )
-        if not shared:
-            per_grasp, transmission = transmission, None
-        m = (transmission if shared else per_grasp).shape[-1]
+        m = T.shape[-1]
+    passive = None
     if passive_torque is not None:
-        passive_torque = _real("passive_torque", passive_torque)
-        if passive_torque.ndim not in (1, 2) or passive_torque.shape[-1] != JT.shape[1]:
+        tp = _real("passive_torque", passive_torque)
+        if tp.ndim not in (1, 2) or tp.shape[-1] != jt.shape[1]:
             raise ValueError(
-                f"passive_torque: expected shape ({JT.shape[1]},) or ({B}, {JT.shape[1]}), one per row of JT, got {passive_torque.shape}"
+                f"passive_torque: expected shape ({jt.shape[1]},) or ({B}, {jt.shape[1]}), one per row of JT, got {tp.shape}"
             )
-        if passive_torque.ndim == 1:
-            passive_torque = np.broadcast_to(passive_torque, (B,) + passive_torque.shape)
-        passive_torque = np.ascontiguousarray(passive_torque)
+        passive = np.ascontiguousarray(np.broadcast_to(tp, (B, tp.shape[0])) if tp.ndim == 1 else tp)
     lead = (B,) if single else (B, K)
     outs = _outputs(lead, m, torque, objective, wrench_residual, status)
-    F = _forces(contact_forces, lead, G.shape[2])
+    F = _forces(contact_forces, lead, g.shape[2])
     spec = {
         "contacts": _contacts(contacts),
         "torque_weights": torque_weights,
         "torque_limits": _limits(torque_limits),
         "min_normal_force": min_normal_force,
         "joint_names": None if joint_names is None else list(joint_names),
-        "transmission": None if transmission is None else transmission.tolist(),
+        "transmission": None if shared is None else shared.tolist(),
         "actuator_names": None if actuator_names is None else list(actuator_names),
     }
     settings = _settings(backend, cones, sides, latitudes, sfce_spacing, internal_forces, paper_model)
-    threads = _threads(threads)
     errors = _native.solve_batch(
-        G,
-        JT,
+        g,
+        jt,
         W3,
-        passive_torque,
+        passive,
         per_grasp,
         _dumps(spec),
         _dumps(settings),
-        threads,
+        _threads(threads),
         bool(warm_start),
         *_flat(outs, B, K, m),
-        None if F is None else F.reshape((B, K, G.shape[2])),
+        None if F is None else F.reshape((B, K, g.shape[2])),
     )
     return BatchResult(*outs, _errors(errors, single), F)
 
 
-HandBatchResult = namedtuple(
-    "HandBatchResult",
-    ["torque", "objective", "wrench_residual", "status", "errors", "names", "contact_forces"],
-    defaults=(None,),
-)
-HandBatchResult.__doc__ = """``BatchResult`` with ``names``: the joints (or, for an MJCF hand with
-actuators, the actuators) of ``torque``'s last axis, in order; ``contact_forces``
-(with ``contact_forces=True``) in the contacts' order."""
+class HandBatchResult(NamedTuple):
+    """``BatchResult`` with ``names``: the joints (or, for an MJCF hand with
+    actuators, the actuators) of ``torque``'s last axis, in order; ``contact_forces``
+    (with ``contact_forces=True``) in the contacts' order."""
+
+    torque: Array
+    objective: Array
+    wrench_residual: Array
+    status: NDArray[np.int8]
+    errors: BatchErrors
+    names: List[str]
+    contact_forces: Optional[Array] = None
 
 
-HandArrays = namedtuple(
-    "HandArrays",
-    [
-        "G",
-        "JT",
-        "transmission",
-        "joint_names",
-        "actuator_names",
-        "errors",
-        "passive_torque",
-        "object_wrench",
-        "torque_limits",
-    ],
-)
-HandArrays.__doc__ = """What ``Hand.arrays`` builds: ``G[B,6,n]`` and ``JT[B,m,n]`` per grasp
-(NaN for a rejected one), the transmission of an MJCF hand with actuators (else None):
-``T[m,a]``, or ``T[B,m,a]`` per grasp when spatial tendons drive it (their moment arms
-change with the configuration), the names of JT's rows and T's columns, ``errors``:
-``{b: message}``, and ``passive_torque[B,m]``: the springs' torques on JT's rows at
-each configuration (MuJoCo's ``qfrc_spring``), plus the links' weight with
-``gravity``; zero for a hand without either. ``solve_batch`` takes it as
-``passive_torque`` to solve what ``Hand.solve_batch`` solves. ``object_wrench[B,6]``,
-with ``object_mass``: what the object's weight asks of the contacts, in the object
-frame (add it to the wrenches), else None. ``torque_limits[a|m, 2]``: the model's
-limits (``torque_limits="model"``: URDF efforts, MJCF force ranges) on T's columns, or
-JT's rows without T, as ``[lower, upper]`` rows with ``∓inf`` where open; ``solve_batch``
-takes it as ``torque_limits``."""
+class HandArrays(NamedTuple):
+    """What ``Hand.arrays`` builds: ``G[B,6,n]`` and ``JT[B,m,n]`` per grasp
+    (NaN for a rejected one), the transmission of an MJCF hand with actuators (else None):
+    ``T[m,a]``, or ``T[B,m,a]`` per grasp when spatial tendons drive it (their moment arms
+    change with the configuration), the names of JT's rows and T's columns, ``errors``:
+    ``{b: message}``, and ``passive_torque[B,m]``: the springs' torques on JT's rows at
+    each configuration (MuJoCo's ``qfrc_spring``), plus the links' weight with
+    ``gravity``; zero for a hand without either. ``solve_batch`` takes it as
+    ``passive_torque`` to solve what ``Hand.solve_batch`` solves. ``object_wrench[B,6]``,
+    with ``object_mass``: what the object's weight asks of the contacts, in the object
+    frame (add it to the wrenches), else None. ``torque_limits[a|m, 2]``: the model's
+    limits (``torque_limits="model"``: URDF efforts, MJCF force ranges) on T's columns, or
+    JT's rows without T, as ``[lower, upper]`` rows with ``∓inf`` where open; ``solve_batch``
+    takes it as ``torque_limits``."""
+
+    G: Array
+    JT: Array
+    transmission: Optional[Array]
+    joint_names: List[str]
+    actuator_names: Optional[List[str]]
+    errors: Dict[int, str]
+    passive_torque: Array
+    object_wrench: Optional[Array]
+    torque_limits: Array
 
 
-def _object(object_mass, center_of_mass) -> Optional[dict]:
+def _object(object_mass: Optional[float], center_of_mass: Optional[ArrayLike]) -> Optional[Dict[str, Any]]:
     """The hand form's ``object``, from ``Hand``'s keywords."""
     if object_mass is None:
         if center_of_mass is not None:
@@ -646,7 +719,7 @@ class Hand:
     (``"object"`` or ``"link"``), ``position`` and ``normal``.
     """
 
-    def __init__(self, path: Union[str, os.PathLike]):
+    def __init__(self, path: Union[str, "os.PathLike[str]"]):
         self._path = os.fspath(path)
         self._native = _native.Hand(self._path)
 
@@ -656,33 +729,39 @@ class Hand:
         return self._native.name
 
     @property
-    def joint_names(self) -> list:
+    def joint_names(self) -> List[str]:
         """The independent joints (neither fixed nor mimic), in file order: the columns
         of ``joint_positions``."""
         return self._native.joint_names
 
     @property
-    def links(self) -> list:
+    def links(self) -> List[str]:
         """The links (MJCF bodies), in file order."""
         return self._native.links
 
     @property
-    def sites(self) -> list:
+    def sites(self) -> List[str]:
         """The MJCF sites."""
         return self._native.sites
 
     @property
-    def warnings(self) -> list:
+    def warnings(self) -> List[str]:
         """What reading the file ignored or found suspicious, one line each."""
         return self._native.warnings
 
-    def __reduce__(self):
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
         return (Hand, (self._path,))
 
     def __repr__(self) -> str:
         return repr(self._native)
 
-    def _poses(self, joint_positions, positions, normals, object_pose):
+    def _poses(
+        self,
+        joint_positions: ArrayLike,
+        positions: Optional[ArrayLike],
+        normals: Optional[ArrayLike],
+        object_pose: Optional[ArrayLike],
+    ) -> Tuple[Array, Optional[Array], Optional[Array], Optional[Array]]:
         """The per-grasp arrays, checked and made C-contiguous float64."""
         q = _real("joint_positions", joint_positions)
         if q.ndim != 2:
@@ -690,24 +769,24 @@ class Hand:
                 f"joint_positions: expected shape (B, {len(self.joint_names)}), got {q.shape}"
             )
         B = q.shape[0]
-        arrays = {}
-        for name, a in (("positions", positions), ("normals", normals)):
-            if a is not None:
-                a = _real(name, a)
-                if a.ndim != 3:
-                    raise ValueError(f"{name}: expected shape (B, k, 3), got {a.shape}")
+        arrays: Dict[str, Optional[Array]] = {}
+        for name, given in (("positions", positions), ("normals", normals)):
+            a = None if given is None else _real(name, given)
+            if a is not None and a.ndim != 3:
+                raise ValueError(f"{name}: expected shape (B, k, 3), got {a.shape}")
             arrays[name] = a
+        pose = None
         if object_pose is not None:
-            object_pose = _real("object_pose", object_pose)
-            if object_pose.shape == (7,):
-                object_pose = np.ascontiguousarray(np.broadcast_to(object_pose, (B, 7)))
-            elif object_pose.ndim != 2:
+            pose = _real("object_pose", object_pose)
+            if pose.shape == (7,):
+                pose = np.ascontiguousarray(np.broadcast_to(pose, (B, 7)))
+            elif pose.ndim != 2:
                 raise ValueError(
-                    f"object_pose: expected shape (7,) or ({B}, 7), [x, y, z, qw, qx, qy, qz], got {object_pose.shape}"
+                    f"object_pose: expected shape (7,) or ({B}, 7), [x, y, z, qw, qx, qy, qz], got {pose.shape}"
                 )
-        return q, arrays["positions"], arrays["normals"], object_pose
+        return q, arrays["positions"], arrays["normals"], pose
 
-    def frames(self, joint_positions, names: Sequence[str]):
+    def frames(self, joint_positions: ArrayLike, names: Sequence[str]) -> Tuple[Array, Array]:
         """Where sites and links are: ``(positions, rotations)`` of the frames ``names``
         (MJCF sites, or links) at each configuration, in the model's root frame (a
         URDF's root link, an MJCF's world; ``object_pose`` is given in it).
@@ -729,23 +808,23 @@ class Hand:
             )
         if isinstance(names, str):
             raise ValueError("names: expected a sequence of link or site names, got a string")
-        names = [str(n) for n in names]
-        P = np.empty((q.shape[0], len(names), 3))
-        R = np.empty((q.shape[0], len(names), 3, 3))
-        self._native.frames(q, names, P, R)
+        frames = [str(n) for n in names]
+        P = np.empty((q.shape[0], len(frames), 3))
+        R = np.empty((q.shape[0], len(frames), 3, 3))
+        self._native.frames(q, frames, P, R)
         return (P[0], R[0]) if single else (P, R)
 
     def arrays(
         self,
-        joint_positions,
-        contacts: Sequence[Mapping],
+        joint_positions: ArrayLike,
+        contacts: Contacts,
         *,
-        positions=None,
-        normals=None,
-        object_pose=None,
-        gravity=None,
-        object_mass=None,
-        center_of_mass=None,
+        positions: Optional[ArrayLike] = None,
+        normals: Optional[ArrayLike] = None,
+        object_pose: Optional[ArrayLike] = None,
+        gravity: Union[None, str, ArrayLike] = None,
+        object_mass: Optional[float] = None,
+        center_of_mass: Optional[ArrayLike] = None,
     ) -> HandArrays:
         """Each grasp's G, Jᵀ and passive torques (the springs', and the links' weight
         with ``gravity``), posed as ``solve_batch`` poses them (same arguments), for
@@ -764,30 +843,39 @@ class Hand:
         JT = np.empty((B, m, n))
         TP = np.empty((B, m))
         T = None if d["transmission"] is None else np.array(d["transmission"], dtype=np.float64)
-        T3 = np.empty((B,) + T.shape) if d["transmission_varies"] else None
+        T3 = np.empty((B,) + T.shape) if T is not None and d["transmission_varies"] else None
         OW = None if held is None else np.empty((B, 6))
         errors = self._native.arrays(q, P, N, pose, rows, spec_json, G, JT, TP, T3, OW)
-        T = T if T3 is None else T3
         limits = np.full((len(d["torque_limits"]), 2), [-np.inf, np.inf])
         for j, lim in enumerate(d["torque_limits"]):
             if isinstance(lim, list):
                 limits[j] = [-np.inf if lim[0] is None else lim[0], np.inf if lim[1] is None else lim[1]]
             elif lim is not None:
                 limits[j] = [-lim, lim]
-        return HandArrays(G, JT, T, d["joint_names"], d["actuator_names"], dict(errors), TP, OW, limits)
+        return HandArrays(
+            G,
+            JT,
+            T if T3 is None else T3,
+            d["joint_names"],
+            d["actuator_names"],
+            dict(errors),
+            TP,
+            OW,
+            limits,
+        )
 
     def solve_batch(
         self,
-        joint_positions,
-        W,
-        contacts: Sequence[Mapping],
+        joint_positions: ArrayLike,
+        W: Optional[ArrayLike],
+        contacts: Contacts,
         *,
-        positions=None,
-        normals=None,
-        object_pose=None,
-        gravity=None,
-        object_mass=None,
-        center_of_mass=None,
+        positions: Optional[ArrayLike] = None,
+        normals: Optional[ArrayLike] = None,
+        object_pose: Optional[ArrayLike] = None,
+        gravity: Union[None, str, ArrayLike] = None,
+        object_mass: Optional[float] = None,
+        center_of_mass: Optional[ArrayLike] = None,
         backend: Optional[str] = None,
         cones: str = "linear",
         sides: Optional[int] = None,
@@ -795,16 +883,16 @@ class Hand:
         sfce_spacing: Optional[str] = None,
         internal_forces: Optional[str] = None,
         paper_model: bool = False,
-        torque_weights=None,
-        torque_limits=None,
-        min_normal_force=None,
+        torque_weights: Optional[ArrayLike] = None,
+        torque_limits: Optional[TorqueLimits] = None,
+        min_normal_force: Optional[MinNormalForce] = None,
         threads: Optional[int] = None,
         warm_start: bool = True,
-        torque: Optional[np.ndarray] = None,
-        objective: Optional[np.ndarray] = None,
-        wrench_residual: Optional[np.ndarray] = None,
-        status: Optional[np.ndarray] = None,
-        contact_forces=False,
+        torque: Optional[Array] = None,
+        objective: Optional[Array] = None,
+        wrench_residual: Optional[Array] = None,
+        status: Optional[NDArray[np.int8]] = None,
+        contact_forces: Union[bool, Array] = False,
     ) -> HandBatchResult:
         """Solves B grasps of this hand, each for one or K wrenches, in parallel.
 
@@ -840,8 +928,7 @@ class Hand:
             if held is None:
                 raise ValueError("W: expected [B, 6] or [B, K, 6] wrenches (None only with object_mass)")
             W = np.zeros((q.shape[0], 6))
-        W = _real("W", W)
-        W3, single = _wrenches(W)
+        W3, single = _wrenches(_real("W", W))
         B, K = q.shape[0], W3.shape[1]
         spec = {
             "contacts": _contacts(contacts),
@@ -861,7 +948,6 @@ class Hand:
         lead = (B,) if single else (B, K)
         outs = _outputs(lead, m, torque, objective, wrench_residual, status)
         F = _forces(contact_forces, lead, n)
-        threads = _threads(threads)
         errors = self._native.solve_batch(
             q,
             W3,
@@ -871,7 +957,7 @@ class Hand:
             rows,
             spec_json,
             settings_json,
-            threads,
+            _threads(threads),
             bool(warm_start),
             *_flat(outs, B, K, m),
             None if F is None else F.reshape((B, K, n)),
@@ -885,7 +971,7 @@ def synthetic_grasps(
     joints_per_finger: int = 3,
     wrenches: int = 0,
     seed: int = 0,
-):
+) -> Tuple[Array, Array, Array]:
     """Random but physically sensible fingertip grasps of a sphere, for trying things
     and benchmarks: ``(G[B,6,n], JT[B,m,n], W[B,6] or W[B,K,6])`` with point contacts
     (``n = 3·fingers``, contact frames with z along the inward normal), serial fingers
@@ -938,7 +1024,7 @@ def synthetic_grasps(
     if wrenches:
         Wk = np.repeat(W[:, None, :], wrenches, axis=1)
         for k in range(wrenches):
-            axis, sign = (k // 2) % 3, 1.0 if k % 2 == 0 else -1.0
-            Wk[:, k, axis] += sign * 0.1 * mass * 9.81
+            component, sign = (k // 2) % 3, 1.0 if k % 2 == 0 else -1.0
+            Wk[:, k, component] += sign * 0.1 * mass * 9.81
         return G, JT, Wk
     return G, JT, W
