@@ -464,9 +464,10 @@ impl<'a> View<'a> {
             Vector3::new(ft[0], ft[1], ft[2]),
             Vector3::new(ft[3], ft[4], ft[5]),
         );
-        // MuJoCo's z axis points from `to` back to `from`.
+        // MuJoCo's z axis points from `to` back to `from`; ends that coincide to
+        // rounding (relative to where they are, so in any unit) leave it unrotated.
         let dir = a - b;
-        let rot = if dir.norm() < 1e-12 {
+        let rot = if dir.norm() <= 1e-12 * a.norm().max(b.norm()) {
             UnitQuaternion::identity()
         } else {
             z_to(dir.normalize())

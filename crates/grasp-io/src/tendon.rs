@@ -13,8 +13,12 @@
 use crate::frame::{Isometry3, Vector3};
 use crate::urdf::{JointKind, Pose, Robot};
 
-/// Below this a length, a squared length or a determinant is zero (MuJoCo's
-/// `mjMINVAL`): the same rule picks the same side and the same "no wrap".
+/// Below this, relative to the lengths it is compared with, a length, a squared length
+/// or a determinant is zero: MuJoCo's `mjMINVAL`, which MuJoCo compares with absolute
+/// values, taken relative to the wrap's own scale (its radius, its ends' distances), so
+/// that a hand written in other units wraps the same way. At every configuration that
+/// is not degenerate at the level of rounding, the sides and the "no wrap"s are
+/// MuJoCo's.
 const TINY: f64 = 1e-15;
 
 /// The solid a tendon wraps around.
@@ -172,7 +176,7 @@ impl Robot {
             |(a, la): (Vector3, usize), (b, lb): (Vector3, usize), scale: f64, arms: &mut [f64]| {
                 let d = b - a;
                 let n = d.norm();
-                if la == lb || n < TINY {
+                if la == lb || n < TINY * (a.norm() + b.norm()) {
                     return n;
                 }
                 let u = d / n;
@@ -288,7 +292,7 @@ pub(crate) fn wrap(
         frame.inverse_transform_point(x0),
         frame.inverse_transform_point(x1),
     );
-    if p0.norm() < TINY || p1.norm() < TINY {
+    if p0.norm() < TINY * radius || p1.norm() < TINY * radius {
         return Ok(None);
     }
     // The plane of the circle: a cylinder's cross-section, or the sphere's great
@@ -299,7 +303,7 @@ pub(crate) fn wrap(
             let ax0 = p0.normalize();
             let mut normal = p0.cross(&p1);
             let nrm = normal.norm();
-            if nrm < TINY {
+            if nrm < TINY * p0.norm() * p1.norm() {
                 // Ends in line with the centre: any plane through them.
                 let a = ax0.map(f64::abs);
                 let i = if a.y > a.x && a.y > a.z {
@@ -327,7 +331,7 @@ pub(crate) fn wrap(
             if s.norm() < radius {
                 return Err(());
             }
-            let sd = normalize2(flat(&s));
+            let sd = normalize2(flat(&s), radius);
             Some([sd[0] * radius, sd[1] * radius])
         }
     };
@@ -353,10 +357,10 @@ pub(crate) fn wrap(
     )))
 }
 
-/// `v / |v|`, or `(1, 0)` when `|v|` is below [`TINY`].
-fn normalize2(v: [f64; 2]) -> [f64; 2] {
+/// `v / |v|`, or `(1, 0)` when `|v|` is below [`TINY`] times `scale`.
+fn normalize2(v: [f64; 2], scale: f64) -> [f64; 2] {
     let n = v[0].hypot(v[1]);
-    if n < TINY {
+    if n < TINY * scale {
         [1.0, 0.0]
     } else {
         [v[0] / n, v[1] / n]
@@ -366,7 +370,8 @@ fn normalize2(v: [f64; 2]) -> [f64; 2] {
 /// Whether the segments `p1 p2` and `p3 p4` cross.
 fn crosses(p1: [f64; 2], p2: [f64; 2], p3: [f64; 2], p4: [f64; 2]) -> bool {
     let det = (p4[1] - p3[1]) * (p2[0] - p1[0]) - (p4[0] - p3[0]) * (p2[1] - p1[1]);
-    if det.abs() < TINY {
+    let lengths = (p2[0] - p1[0]).hypot(p2[1] - p1[1]) * (p4[0] - p3[0]).hypot(p4[1] - p3[1]);
+    if det.abs() < TINY * lengths {
         return false;
     }
     let a = ((p4[0] - p3[0]) * (p1[1] - p3[1]) - (p4[1] - p3[1]) * (p1[0] - p3[0])) / det;
@@ -385,12 +390,12 @@ fn circle_wrap(
 ) -> Option<([f64; 2], [f64; 2], f64)> {
     let dot = |a: [f64; 2], b: [f64; 2]| a[0] * b[0] + a[1] * b[1];
     let (sq0, sq1, rr) = (dot(e0, e0), dot(e1, e1), radius * radius);
-    if sq0 < rr || sq1 < rr || radius < TINY {
+    if sq0 < rr || sq1 < rr || radius < TINY * sq0.max(sq1).sqrt() {
         return None;
     }
     let dif = [e1[0] - e0[0], e1[1] - e0[1]];
     let dd = dot(dif, dif);
-    if dd < TINY {
+    if dd < TINY * rr {
         return None;
     }
     // The point of the straight string nearest the centre.
@@ -409,10 +414,12 @@ fn circle_wrap(
     };
     let candidates = [1.0, -1.0].map(|sign| {
         let (t0, t1) = (tangent(e0, sq0, s0, sign), tangent(e1, sq1, s1, -sign));
+        // A candidate whose pieces cross is never preferred (MuJoCo scores it −10000,
+        // below any other at the scale of metres; here below any other in any unit).
         let good = if crosses(e0, t0, e1, t1) {
-            -10000.0
+            f64::NEG_INFINITY
         } else if let Some(s) = side {
-            dot(normalize2([t0[0] + t1[0], t0[1] + t1[1]]), s)
+            dot(normalize2([t0[0] + t1[0], t0[1] + t1[1]], radius), s)
         } else {
             let d = [t0[0] - t1[0], t0[1] - t1[1]];
             -dot(d, d)
@@ -428,10 +435,18 @@ fn circle_wrap(
     if crosses(e0, t0, e1, t1) {
         return None;
     }
-    let (n0, n1) = (normalize2(t0), normalize2(t1));
+    let (n0, n1) = (normalize2(t0, radius), normalize2(t1, radius));
     let mut angle = dot(n0, n1).clamp(-1.0, 1.0).acos();
+    // The long way round when the tangent points' order says so; a sine of the angle
+    // below 1e-12 is rounding, not an order: the string touches the circle at one
+    // point (a string laid tangent to it), and its arc is 0, not 2π.
     let cross = t0[1] * t1[0] - t0[0] * t1[1];
-    if (cross > 0.0 && i == 1) || (cross < 0.0 && i == 0) {
+    let order = if cross.abs() <= 1e-12 * rr {
+        0.0
+    } else {
+        cross
+    };
+    if (order > 0.0 && i == 1) || (order < 0.0 && i == 0) {
         angle = 2.0 * std::f64::consts::PI - angle;
     }
     Some((t0, t1, radius * angle))

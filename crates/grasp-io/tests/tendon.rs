@@ -57,6 +57,28 @@ fn a_string_wrapped_on_a_pulley_pulls_with_its_radius() {
     }
 }
 
+/// A string laid tangent to a pulley touches it at one point: its length is the
+/// straight distance, not that plus a full turn (2π r), whichever way rounding tips
+/// the order of the two tangent points. The ends are those of a string of the Aero
+/// hand, as its kinematics place them (tangent to within rounding, the second end its
+/// side site), where the order came out reversed.
+#[test]
+fn a_string_tangent_to_a_pulley_takes_no_turn() {
+    let text = r#"<mujoco><compiler angle="radian"/><worldbody>
+        <site name="a" pos="0.015000000000000005 0.0024999999999999953 0"/>
+        <body name="arm"><joint name="q" axis="0 0 1"/>
+          <geom name="g" type="cylinder" size="0.0025 0.005"/>
+          <site name="b" pos="-0.0020000000000000065 0.002500000000000001 0"/>
+        </body></worldbody>
+        <tendon><spatial name="t"><site site="a"/><geom geom="g" sidesite="b"/><site site="b"/></spatial></tendon>
+        <actuator><motor name="m" tendon="t"/></actuator></mujoco>"#;
+    let robot = Robot::parse_mjcf(text, "tangent.xml", None).unwrap();
+    let (length, _) = arm(&robot, 0.0);
+    // Within the string's rounding: a few ε inside the circle, it wraps by an angle of
+    // order √ε, a detour of order r √ε.
+    assert!((length - 0.017).abs() <= 0.0025 * 1e-7, "{length}");
+}
+
 #[test]
 fn moment_arms_are_the_derivative_of_the_length() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
