@@ -10,7 +10,7 @@ use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettings, DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
 };
-use grasp_core::conic::CERTIFICATE_TOLERANCE;
+use grasp_core::conic::{CERTIFICATE_TOLERANCE, RAY_MARGIN};
 use grasp_core::linalg::{decompose, RankThreshold};
 use grasp_core::matrix::norm2;
 use grasp_core::{
@@ -74,11 +74,20 @@ impl ClarabelSettings {
     }
 }
 
+/// Clarabel's infeasibility tolerances (absolute and relative) for a second run, when
+/// the first one's certificate of infeasibility does not verify: at its defaults (1e-8,
+/// on its equilibrated problem) Clarabel can stop after a few iterations on a grasp the
+/// inscribed polyhedra prove feasible, with multipliers whose torque terms are 1e-5 to
+/// 1e-4 of their size.
+const STRICT_INFEASIBILITY: f64 = 1e-13;
+
 /// The Clarabel backend for one grasp.
 pub struct ClarabelSolver {
     qp: TorqueQp,
     conic: ConicForm,
     settings: DefaultSettings<f64>,
+    /// `settings` with [`STRICT_INFEASIBILITY`], swapped in for the second run.
+    strict: DefaultSettings<f64>,
     p: CscMatrix<f64>,
     q: Vec<f64>,
     a: CscMatrix<f64>,
@@ -120,8 +129,12 @@ impl ClarabelSolver {
         // ½ xᵀ P x = ‖x_τ‖² = Σ w_j τ_j² / (α² κ).
         let p =
             CscMatrix::new_from_triplets(nx, nx, (0..m).collect(), (0..m).collect(), vec![2.0; m]);
+        let mut strict = settings.clone();
+        strict.tol_infeas_abs = STRICT_INFEASIBILITY;
+        strict.tol_infeas_rel = STRICT_INFEASIBILITY;
         Ok(Self {
             settings,
+            strict,
             p,
             q: vec![0.0; nx],
             b: vec![0.0; conic.rows()],
@@ -154,6 +167,100 @@ impl ClarabelSolver {
             self.run(true)?;
         }
         Ok(())
+    }
+
+    /// The relaxed problem solved, then the full one where the relaxation's answer
+    /// breaks a limit (see [`TorqueSolver::solve_raw`]); whether `b` is left relaxed.
+    fn attempt(&mut self, w: &[f64; 6], alpha: f64) -> Result<bool, String> {
+        let limits = self.conic.limit_rows.clone();
+        let relaxed = self.b[limits.clone()].iter().any(|&v| v > FAR_LIMIT);
+        if relaxed {
+            self.b[limits]
+                .iter_mut()
+                .filter(|v| **v > FAR_LIMIT)
+                .for_each(|v| *v = f64::INFINITY);
+        }
+        self.solve_b()?;
+        if relaxed && !self.relaxation_holds(alpha) {
+            self.conic.b_into(w, &mut self.b);
+            self.solve_b()?;
+        }
+        Ok(relaxed)
+    }
+
+    fn claims_infeasibility(&self) -> bool {
+        self.solver.as_ref().is_some_and(|s| {
+            matches!(
+                s.solution.status,
+                SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible
+            )
+        })
+    }
+
+    /// The last run's multipliers checked from scratch as a ray of the dual of the
+    /// problem in `self.b` ([`ConicForm::dual_ray`]), against `x_p = E⁺ b_E`, a point
+    /// meeting the equalities (0 without them): the proof of infeasibility, or what
+    /// falls short. A ray proves that no torque within `|value| / stationarity` times
+    /// the problem's own scale holds the grasp; as the native check
+    /// ([`CERTIFICATE_TOLERANCE`], value below −[`RAY_MARGIN`] times it) this one asks
+    /// for a margin of [`RAY_MARGIN`] on that ratio, with the dual cones, `x_p` and the
+    /// torque terms within this backend's accuracy, [`RESIDUAL_TOLERANCE`]. Where even
+    /// `x_p`, the least-squares point, misses the equalities by that margin, they admit
+    /// no torque at all: that is the proof.
+    fn verified_ray(&mut self) -> Result<Reason, String> {
+        let c = &self.conic;
+        let z = match self.solver.as_ref() {
+            Some(s) => s.solution.z.clone(),
+            None => return Err("no multipliers".into()),
+        };
+        let eq = match c.cones.first() {
+            Some(&ConeKind::Zero(p)) => p,
+            _ => 0,
+        };
+        // The equalities' null space must be known to judge the torque terms.
+        if c.eq_null_t.as_ref().is_some_and(|nt| nt.ncols() != c.nx) {
+            return Err("the equalities could not be decomposed".into());
+        }
+        let mut xp = vec![0.0; c.nx];
+        if eq > 0 {
+            // E⁺ b_E, also where the equalities are dependent (consistent, as the
+            // core's check before any backend ensures): the ray check measures how far
+            // it misses them.
+            let e = Matrix::from_fn(eq, c.nx, |i, j| c.a[(i, j)]);
+            let pinv = match &c.eq_pinv {
+                Some(p) => p.clone(),
+                None => decompose(&e, RankThreshold::Relative(1e-13))
+                    .map_err(|e| format!("the equalities could not be decomposed: {e}"))?
+                    .pseudo_inverse(),
+            };
+            for (i, x) in xp.iter_mut().enumerate() {
+                *x = (0..eq).map(|k| pinv[(i, k)] * self.b[k]).sum();
+            }
+        }
+        let tol = RESIDUAL_TOLERANCE;
+        let ray = c.dual_ray(&self.b, &xp, &z, tol, &mut self.scratch);
+        if ray.particular > RAY_MARGIN * tol {
+            return Ok(Reason::Backend {
+                backend: "clarabel",
+                message: format!(
+                    "no torque meets the equality rows (consistency, transmission): their least-squares point misses them by {:.1e} (relative)",
+                    ray.particular
+                ),
+            });
+        }
+        let floor = RAY_MARGIN * ray.stationarity.max(CERTIFICATE_TOLERANCE);
+        if ray.dual <= tol && ray.particular <= tol && ray.stationarity <= tol && ray.value < -floor
+        {
+            Ok(Reason::DualRay {
+                value: ray.value,
+                stationarity: ray.stationarity,
+            })
+        } else {
+            Err(format!(
+                "torque terms left {:.1e}, value {:.1e}, dual cones missed by {:.1e}, the equalities by {:.1e} (relative; a ray needs at most {tol:.0e} each and a value below −{floor:.1e})",
+                ray.stationarity, ray.value, ray.dual, ray.particular
+            ))
+        }
     }
 
     /// Whether the last answer of a relaxed solve meets the torque limits' rows (their
@@ -355,25 +462,41 @@ impl TorqueSolver for ClarabelSolver {
         // its presolve drops), and that answer kept only if it meets them: the optimum
         // of a relaxation that is feasible is optimal, and a relaxation that is
         // infeasible proves the problem so. Otherwise the full problem is solved.
-        let limits = self.conic.limit_rows.clone();
-        let relaxed = self.b[limits.clone()].iter().any(|&v| v > FAR_LIMIT);
-        if relaxed {
-            self.b[limits.clone()]
-                .iter_mut()
-                .filter(|v| **v > FAR_LIMIT)
-                .for_each(|v| *v = f64::INFINITY);
-        }
-        if let Err(e) = self.solve_b() {
-            out.status = Status::NumericalFailure;
-            out.reason = backend(e);
-            return;
-        }
-        if relaxed && !self.relaxation_holds(alpha) {
-            self.conic.b_into(w, &mut self.b);
-            if let Err(e) = self.solve_b() {
+        let mut relaxed = match self.attempt(w, alpha) {
+            Ok(relaxed) => relaxed,
+            Err(e) => {
                 out.status = Status::NumericalFailure;
                 out.reason = backend(e);
                 return;
+            }
+        };
+        // Clarabel's infeasibility is reported only with its multipliers checked from
+        // scratch as a ray of the dual; otherwise it runs once more with strict
+        // infeasibility tolerances, and an unproved claim is a numerical failure.
+        let mut ray = None;
+        if self.claims_infeasibility() {
+            self.conic.b_into(w, &mut self.b);
+            match self.verified_ray() {
+                Ok(proof) => ray = Some(Ok(proof)),
+                Err(_) => {
+                    std::mem::swap(&mut self.settings, &mut self.strict);
+                    self.solver = None;
+                    let again = self.attempt(w, alpha);
+                    std::mem::swap(&mut self.settings, &mut self.strict);
+                    match again {
+                        Ok(r) => relaxed = r,
+                        Err(e) => {
+                            self.solver = None;
+                            out.status = Status::NumericalFailure;
+                            out.reason = backend(e);
+                            return;
+                        }
+                    }
+                    if self.claims_infeasibility() {
+                        self.conic.b_into(w, &mut self.b);
+                        ray = Some(self.verified_ray());
+                    }
+                }
             }
         }
         let Some(solver) = self.solver.as_ref() else {
@@ -381,23 +504,28 @@ impl TorqueSolver for ClarabelSolver {
         };
         let sol = &solver.solution;
         out.iterations = sol.iterations as usize;
-        let exact = self.qp.constraints.has_exact();
         let (mut status, mut reason) = match sol.status {
             SolverStatus::Solved => (Status::Optimal, None),
             SolverStatus::AlmostSolved => (Status::AlmostOptimal, None),
-            SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => (
-                Status::Infeasible,
-                backend(format!(
-                    "a certificate of primal infeasibility ({:?}): no torque keeps every contact force inside its {} cone while balancing the wrench",
-                    sol.status,
-                    if exact { "exact" } else { "linearised" }
-                )),
-            ),
+            SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => match ray {
+                Some(Ok(proof)) => (Status::Infeasible, Some(proof)),
+                Some(Err(why)) => (
+                    Status::NumericalFailure,
+                    backend(format!(
+                        "Clarabel reported {:?}, but its multipliers do not prove it: {why}",
+                        sol.status
+                    )),
+                ),
+                None => unreachable!("an infeasibility claim is checked above"),
+            },
             SolverStatus::MaxIterations | SolverStatus::MaxTime => (
                 Status::IterationLimit,
                 backend(format!("stopped: {:?}", sol.status)),
             ),
-            other => (Status::NumericalFailure, backend(format!("stopped: {other:?}"))),
+            other => (
+                Status::NumericalFailure,
+                backend(format!("stopped: {other:?}")),
+            ),
         };
         // Polished where Clarabel ran to an end with an answer, or stalled near one
         // (not where it proved infeasibility): against the limits as they are.
@@ -425,7 +553,7 @@ impl TorqueSolver for ClarabelSolver {
             };
             self.conic
                 .unscale_into(x, alpha, &mut out.torque, &mut out.internal_forces);
-            if !exact {
+            if !self.qp.constraints.has_exact() {
                 // μ_i = z_i ρ_i α κ for Σ w τ² on the rows H τ ≥ c.
                 let (c, rows) = (&self.conic, self.qp.inequality_rows());
                 out.multipliers.extend(
