@@ -6,7 +6,8 @@ fn fixture(name: &str) -> String {
 
 #[test]
 fn sweep_command_writes_csv_svg_and_json() {
-    let dir = std::env::temp_dir().join(format!("grasp-torque-sweep-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("grasp-torque-sweep-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (csv, svg) = (dir.join("s.csv"), dir.join("s.svg"));
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
@@ -162,7 +163,8 @@ fn report_labels_follow_their_numbers() {
         assert!(!exact.contains("N = "), "{exact}");
     }
     // Rounding noise is shown as 0, and unloaded contacts as such.
-    let zero = std::env::temp_dir().join(format!("grasp-torque-zero-{}.json", std::process::id()));
+    let zero = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("grasp-torque-zero-{}.json", std::process::id()));
     let mut p: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&paper).unwrap()).unwrap();
     p["wrench"] = serde_json::json!([0, 0, 0, 0, 0, 0]);

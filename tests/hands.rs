@@ -31,7 +31,8 @@ fn json(out: &Output) -> serde_json::Value {
 }
 
 fn temp_dir() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("grasp-torque-hands-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("grasp-torque-hands-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }

@@ -113,7 +113,8 @@ fn an_unactuated_direction_that_must_carry_torque_is_named() {
     p["hand"]["model"] = serde_json::json!(fixture("mjcf/shadow_hand/shadow_hand.xml"));
     p["contacts"][1]["normal"] = serde_json::json!([0.0, -1.0, 0.0]);
     p["contacts"][1]["frame"] = serde_json::json!("link");
-    let dir = std::env::temp_dir().join(format!("gt-mjcf-hands-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("gt-mjcf-hands-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("pad.json");
     std::fs::write(&path, p.to_string()).unwrap();
@@ -141,7 +142,8 @@ fn an_unactuated_direction_that_must_carry_torque_is_named() {
 /// 0, and dropped it as no limit.)
 #[test]
 fn a_pull_only_tendon_is_held() {
-    let dir = std::env::temp_dir().join(format!("gt-mjcf-range-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("gt-mjcf-range-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let text = std::fs::read_to_string(fixture("mjcf/menagerie/aero_right.xml")).unwrap();
     let mut pulls = 0;
@@ -306,7 +308,8 @@ fn mjcf_listing_and_errors() {
         (t["moment"]["f1_mid"].as_f64().unwrap() - 0.018).abs() < 1e-15,
         "{t}"
     );
-    let dir = std::env::temp_dir().join(format!("gt-mjcf-bad-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("gt-mjcf-bad-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let bad = dir.join("bad.xml");
     std::fs::write(&bad, "<mujoco>\n<worldbody>\n<body name=\"a\"><joint/>\n<body name=\"b\"><joint type=\"ball\"/></body></body>\n</worldbody></mujoco>").unwrap();
@@ -327,7 +330,8 @@ fn batch_lines_with_an_mjcf_hand_report_actuators_and_joints() {
     .unwrap();
     p["hand"]["model"] = serde_json::json!(fixture("mjcf/shadow_hand/shadow_hand.xml"));
     p["wrenches"] = serde_json::json!([[0, 0, -0.4905, 0, 0, 0], [0.05, 0, -0.4905, 0, 0, 0]]);
-    let dir = std::env::temp_dir().join(format!("gt-mjcf-batch-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("gt-mjcf-batch-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("in.jsonl");
     std::fs::write(&path, format!("{p}\n{p}\n")).unwrap();

@@ -29,7 +29,8 @@ fn json_blocks(text: &str) -> Vec<String> {
 }
 
 fn solve(text: &str, name: &str) -> serde_json::Value {
-    let dir = std::env::temp_dir().join(format!("grasp-torque-readme-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("grasp-torque-readme-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     // The hand form names its URDF relative to the problem file, as a user's would be.
     std::fs::copy(

@@ -349,7 +349,8 @@ fn malformed_mjcf_is_a_named_error() {
         assert!(msg.contains(needle), "{needle:?} not in {msg:?}");
     }
     // A self-including file stops at the include depth.
-    let dir = std::env::temp_dir().join(format!("gt-mjcf-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("gt-mjcf-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(
         dir.join("self.xml"),
@@ -625,7 +626,8 @@ fn masses_that_cannot_be_computed_fail_only_gravity() {
         )
     };
     let gravity = |text: &str, g: serde_json::Value| -> Result<Vec<f64>, String> {
-        let dir = std::env::temp_dir().join(format!("gt-mass-{}", std::process::id()));
+        let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+            .join(format!("gt-mass-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(dir.join("h.xml"), text).unwrap();
         let file: HandFile = serde_json::from_value(serde_json::json!({

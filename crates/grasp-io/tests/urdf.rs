@@ -658,7 +658,8 @@ fn gravity_needs_the_moving_links_masses() {
             "<link name=\"a\"><inertial><mass value=\"heavy\"/></inertial></link>\
              <link name=\"b\"><inertial><origin xyz=\"0.1 0 0\"/><mass value=\"2\"/></inertial></link>",
         );
-    let dir = std::env::temp_dir().join(format!("gt-gravity-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("gt-gravity-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("r.urdf"), &text).unwrap();
     let file = |gravity: serde_json::Value| -> Result<grasp_io::HandProblem, ProblemError> {

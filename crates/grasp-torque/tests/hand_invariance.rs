@@ -102,7 +102,8 @@ fn rescale_xml(text: &str, factors: &Factors<'_>) -> String {
 /// A copy of the hand's model folder (its XML and URDF files) with every length
 /// multiplied by `c`, in a fresh folder.
 fn rescaled_model_dir(model: &Path, c: f64, tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("grasp-units-{}-{tag}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("grasp-units-{}-{tag}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let urdf = |e: &str, _: &str, a: &str| (e == "origin" && a == "xyz").then(|| vec![c]);
     for entry in std::fs::read_dir(model.parent().unwrap()).unwrap() {
