@@ -88,6 +88,9 @@ pub struct ClarabelSolver {
     settings: DefaultSettings<f64>,
     /// `settings` with [`STRICT_INFEASIBILITY`], swapped in for the second run.
     strict: DefaultSettings<f64>,
+    /// Whether the last solve ran with `strict`: the next one starts a fresh solver
+    /// with `settings`, as after any other solve that was not reused.
+    strict_used: bool,
     p: CscMatrix<f64>,
     q: Vec<f64>,
     a: CscMatrix<f64>,
@@ -135,6 +138,7 @@ impl ClarabelSolver {
         Ok(Self {
             settings,
             strict,
+            strict_used: false,
             p,
             q: vec![0.0; nx],
             b: vec![0.0; conic.rows()],
@@ -445,6 +449,9 @@ impl TorqueSolver for ClarabelSolver {
     }
 
     fn solve_raw(&mut self, w: &[f64; 6], _warm: &WarmStart<'_>, out: &mut Solution) {
+        if std::mem::take(&mut self.strict_used) {
+            self.solver = None;
+        }
         let (m, d) = (self.conic.joints, self.conic.free);
         out.active_set = None;
         out.torque.clear();
@@ -481,6 +488,7 @@ impl TorqueSolver for ClarabelSolver {
                 Err(_) => {
                     std::mem::swap(&mut self.settings, &mut self.strict);
                     self.solver = None;
+                    self.strict_used = true;
                     let again = self.attempt(w, alpha);
                     std::mem::swap(&mut self.settings, &mut self.strict);
                     match again {

@@ -164,6 +164,24 @@ fn clarabel_claims_infeasibility_only_with_a_checked_ray() {
             "seed {seed}: {:?}",
             clarabel.reason
         );
+        // The strict run leaves no trace: the same solver gives the same answer again.
+        let config = SolverConfig {
+            backend: Some(Backend::Clarabel),
+            cones: Cones::Exact,
+            ..Default::default()
+        };
+        let mut solver = GraspSolver::new(&p, &config).unwrap();
+        let first = solver
+            .solve(&p.wrench, &WarmStart::default())
+            .unwrap()
+            .clone();
+        let again = solver.solve(&p.wrench, &WarmStart::default()).unwrap();
+        assert_eq!(first.status, clarabel.status, "seed {seed}");
+        assert_eq!(
+            (again.status, again.objective.to_bits()),
+            (first.status, first.objective.to_bits()),
+            "seed {seed}"
+        );
         assert_eq!(
             run(&p, Backend::ActiveSet, Cones::Exact).status,
             Status::Optimal
