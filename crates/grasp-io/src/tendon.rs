@@ -176,7 +176,7 @@ impl Robot {
             |(a, la): (Vector3, usize), (b, lb): (Vector3, usize), scale: f64, arms: &mut [f64]| {
                 let d = b - a;
                 let n = d.norm();
-                if la == lb || n < TINY * (a.norm() + b.norm()) {
+                if la == lb || n <= TINY * (a.norm() + b.norm()) {
                     return n;
                 }
                 let u = d / n;
@@ -292,7 +292,7 @@ pub(crate) fn wrap(
         frame.inverse_transform_point(x0),
         frame.inverse_transform_point(x1),
     );
-    if p0.norm() < TINY * radius || p1.norm() < TINY * radius {
+    if p0.norm() <= TINY * radius || p1.norm() <= TINY * radius {
         return Ok(None);
     }
     // The plane of the circle: a cylinder's cross-section, or the sphere's great
@@ -303,7 +303,7 @@ pub(crate) fn wrap(
             let ax0 = p0.normalize();
             let mut normal = p0.cross(&p1);
             let nrm = normal.norm();
-            if nrm < TINY * p0.norm() * p1.norm() {
+            if nrm <= TINY * p0.norm() * p1.norm() {
                 // Ends in line with the centre: any plane through them.
                 let a = ax0.map(f64::abs);
                 let i = if a.y > a.x && a.y > a.z {
@@ -357,10 +357,10 @@ pub(crate) fn wrap(
     )))
 }
 
-/// `v / |v|`, or `(1, 0)` when `|v|` is below [`TINY`] times `scale`.
+/// `v / |v|`, or `(1, 0)` when `|v|` is at most [`TINY`] times `scale` (0 included).
 fn normalize2(v: [f64; 2], scale: f64) -> [f64; 2] {
     let n = v[0].hypot(v[1]);
-    if n < TINY * scale {
+    if n <= TINY * scale {
         [1.0, 0.0]
     } else {
         [v[0] / n, v[1] / n]
@@ -371,7 +371,7 @@ fn normalize2(v: [f64; 2], scale: f64) -> [f64; 2] {
 fn crosses(p1: [f64; 2], p2: [f64; 2], p3: [f64; 2], p4: [f64; 2]) -> bool {
     let det = (p4[1] - p3[1]) * (p2[0] - p1[0]) - (p4[0] - p3[0]) * (p2[1] - p1[1]);
     let lengths = (p2[0] - p1[0]).hypot(p2[1] - p1[1]) * (p4[0] - p3[0]).hypot(p4[1] - p3[1]);
-    if det.abs() < TINY * lengths {
+    if det.abs() <= TINY * lengths {
         return false;
     }
     let a = ((p4[0] - p3[0]) * (p1[1] - p3[1]) - (p4[1] - p3[1]) * (p1[0] - p3[0])) / det;
@@ -390,12 +390,12 @@ fn circle_wrap(
 ) -> Option<([f64; 2], [f64; 2], f64)> {
     let dot = |a: [f64; 2], b: [f64; 2]| a[0] * b[0] + a[1] * b[1];
     let (sq0, sq1, rr) = (dot(e0, e0), dot(e1, e1), radius * radius);
-    if sq0 < rr || sq1 < rr || radius < TINY * sq0.max(sq1).sqrt() {
+    if sq0 < rr || sq1 < rr || radius <= TINY * sq0.max(sq1).sqrt() {
         return None;
     }
     let dif = [e1[0] - e0[0], e1[1] - e0[1]];
     let dd = dot(dif, dif);
-    if dd < TINY * rr {
+    if dd <= TINY * rr {
         return None;
     }
     // The point of the straight string nearest the centre.

@@ -79,6 +79,19 @@ fn a_string_tangent_to_a_pulley_takes_no_turn() {
     assert!((length - 0.017).abs() <= 0.0025 * 1e-7, "{length}");
 }
 
+/// Sites that coincide at the origin (a string of no length, where the scale its
+/// lengths are judged against is 0 too): length 0 and a zero arm, not NaN.
+#[test]
+fn a_string_of_no_length_at_the_origin_pulls_nothing() {
+    let text = r#"<mujoco><worldbody><site name="a" pos="0 0 0"/>
+        <body name="arm"><joint name="q" axis="0 0 1"/><site name="b" pos="0 0 0"/>
+        <geom name="g" type="sphere" size="0.01" pos="0.1 0 0"/></body></worldbody>
+        <tendon><spatial name="t"><site site="a"/><site site="b"/></spatial></tendon>
+        <actuator><motor name="m" tendon="t"/></actuator></mujoco>"#;
+    let robot = Robot::parse_mjcf(text, "origin.xml", None).unwrap();
+    assert_eq!(arm(&robot, 0.0), (0.0, 0.0));
+}
+
 #[test]
 fn moment_arms_are_the_derivative_of_the_length() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
