@@ -230,12 +230,14 @@ impl ClarabelSolver {
             // E⁺ b_E, also where the equalities are dependent (consistent, as the
             // core's check before any backend ensures): the ray check measures how far
             // it misses them.
-            let e = Matrix::from_fn(eq, c.nx, |i, j| c.a[(i, j)]);
             let pinv = match &c.eq_pinv {
                 Some(p) => p.clone(),
-                None => decompose(&e, RankThreshold::Relative(1e-13))
-                    .map_err(|e| format!("the equalities could not be decomposed: {e}"))?
-                    .pseudo_inverse(),
+                None => {
+                    let e = Matrix::from_fn(eq, c.nx, |i, j| c.a[(i, j)]);
+                    decompose(&e, RankThreshold::Relative(1e-13))
+                        .map_err(|e| format!("the equalities could not be decomposed: {e}"))?
+                        .pseudo_inverse()
+                }
             };
             for (i, x) in xp.iter_mut().enumerate() {
                 *x = (0..eq).map(|k| pinv[(i, k)] * self.b[k]).sum();
@@ -494,7 +496,6 @@ impl TorqueSolver for ClarabelSolver {
                     match again {
                         Ok(r) => relaxed = r,
                         Err(e) => {
-                            self.solver = None;
                             out.status = Status::NumericalFailure;
                             out.reason = backend(e);
                             return;
@@ -517,14 +518,14 @@ impl TorqueSolver for ClarabelSolver {
             SolverStatus::AlmostSolved => (Status::AlmostOptimal, None),
             SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => match ray {
                 Some(Ok(proof)) => (Status::Infeasible, Some(proof)),
-                Some(Err(why)) => (
+                why => (
                     Status::NumericalFailure,
                     backend(format!(
-                        "Clarabel reported {:?}, but its multipliers do not prove it: {why}",
-                        sol.status
+                        "Clarabel reported {:?}, but its multipliers do not prove it: {}",
+                        sol.status,
+                        why.and_then(Result::err).unwrap_or_default()
                     )),
                 ),
-                None => unreachable!("an infeasibility claim is checked above"),
             },
             SolverStatus::MaxIterations | SolverStatus::MaxTime => (
                 Status::IterationLimit,
