@@ -77,8 +77,8 @@ impl ClarabelSettings {
 /// Clarabel's infeasibility tolerances (absolute and relative) for a second run, when
 /// the first one's certificate of infeasibility does not verify: at its defaults (1e-8,
 /// on its equilibrated problem) Clarabel can stop after a few iterations on a grasp the
-/// inscribed polyhedra prove feasible, with multipliers whose torque terms are 1e-5 to
-/// 1e-4 of their size.
+/// inscribed polyhedra prove feasible, with multipliers whose torque terms are 1e-4 to
+/// 1e-2 of their size ([`ConicForm::dual_ray`]'s measure).
 const STRICT_INFEASIBILITY: f64 = 1e-13;
 
 /// The Clarabel backend for one grasp.
@@ -487,7 +487,10 @@ impl TorqueSolver for ClarabelSolver {
             self.conic.b_into(w, &mut self.b);
             match self.verified_ray() {
                 Ok(proof) => ray = Some(Ok(proof)),
-                Err(_) => {
+                Err(why) => {
+                    out.warnings.push(format!(
+                        "Clarabel claimed infeasibility, but its multipliers do not prove it ({why}); it ran again with strict infeasibility tolerances"
+                    ));
                     std::mem::swap(&mut self.settings, &mut self.strict);
                     self.solver = None;
                     self.strict_used = true;
