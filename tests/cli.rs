@@ -232,6 +232,16 @@ fn malformed_files_name_the_field() {
             "unknown variant `sticky`",
         ),
         (
+            "model of the wrong type",
+            Box::new(|p| p["contacts"][0]["model"] = 1.into()),
+            "contacts[0].model: invalid type: integer `1`, expected one of `fpc`, `pcwf`, `sfcl`, `sfce`",
+        ),
+        (
+            "internal forces of the wrong type",
+            Box::new(|p| p["internal_forces"] = serde_json::json!([])),
+            "internal_forces: invalid type: sequence, expected one of `compliance`, `euclidean`, `free`",
+        ),
+        (
             "wrench length",
             Box::new(|p| {
                 p["wrench"].as_array_mut().unwrap().pop();

@@ -7,6 +7,7 @@
 //! Each face row is scaled so that its `fz` coefficient is 1: a row reads
 //! `fz − (a·fx + b·fy + c·mz) ≥ 0`, so its value is a slack in units of normal force.
 
+use crate::by_name::ByName;
 use crate::contact::ContactModel;
 use crate::matrix::Matrix;
 use serde::{Deserialize, Serialize};
@@ -18,7 +19,7 @@ pub const MAX_SIDES: usize = 4096;
 pub const MAX_LATITUDES: usize = 256;
 
 /// Where the SFCe latitudes sit on each meridian ellipse.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SfceSpacing {
     /// The paper's eq. 13: polar angles `ψi = πi/(2K)` uniform in the `(r, mz)` plane.
@@ -31,6 +32,12 @@ pub enum SfceSpacing {
     #[default]
     Uniform,
 }
+
+impl ByName for SfceSpacing {
+    const VARIANTS: &'static [Self] = &[Self::Paper, Self::Uniform];
+    const NAMES: &'static [&'static str] = &["paper", "uniform"];
+}
+crate::deserialize_by_name!(SfceSpacing);
 
 /// How finely the friction cones are linearised.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

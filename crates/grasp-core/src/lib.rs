@@ -8,6 +8,7 @@
 //! Torque Optimization for a Dexterous Robotic Hand Using the Linearization of
 //! Constraints".
 
+pub mod by_name;
 pub mod cone;
 pub mod conic;
 pub mod contact;

@@ -21,15 +21,16 @@
 //! core decides the rank of C once and keeps independent rows only, so no backend
 //! makes a rank decision of its own.
 
+use crate::by_name::ByName;
 use crate::contact::ContactModel;
 use crate::error::ModelError;
 use crate::linalg::{decompose, RankThreshold};
 use crate::matrix::{add_columns, column_major, dot, norm_inf, write_columns, Matrix};
 use crate::problem::{GraspProblem, TorqueLimit};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 /// How the passive internal forces (the null space of `[G; Jᵀ]`) are fixed.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum InternalForces {
     /// Least norm in the contact-compliance metric (`mz` measured as `mz/mu_torsion`):
@@ -42,6 +43,12 @@ pub enum InternalForces {
     /// Optimised with the torques: the best case. Needs a backend that supports it.
     Free,
 }
+
+impl ByName for InternalForces {
+    const VARIANTS: &'static [Self] = &[Self::Compliance, Self::Euclidean, Self::Free];
+    const NAMES: &'static [&'static str] = &["compliance", "euclidean", "free"];
+}
+crate::deserialize_by_name!(InternalForces);
 
 impl InternalForces {
     /// `compliance`, `euclidean` or `free`.

@@ -4,6 +4,7 @@
 //! column when the text is not well-formed.
 
 use crate::urdf::Robot;
+use grasp_core::by_name::ByName;
 use grasp_core::cone::Linearization;
 use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
@@ -16,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 /// The contact model names of problem files.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ModelName {
     /// Frictionless point contact.
@@ -28,6 +29,12 @@ pub enum ModelName {
     /// Soft finger, elliptic coupling.
     Sfce,
 }
+
+impl ByName for ModelName {
+    const VARIANTS: &'static [Self] = &[Self::Fpc, Self::Pcwf, Self::Sfcl, Self::Sfce];
+    const NAMES: &'static [&'static str] = &["fpc", "pcwf", "sfcl", "sfce"];
+}
+grasp_core::deserialize_by_name!(ModelName);
 
 /// One entry of `contacts` in a matrix-form file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

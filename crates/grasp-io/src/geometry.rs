@@ -18,6 +18,7 @@
 //! ```
 
 use crate::file::{ModelName, Options};
+use grasp_core::by_name::ByName;
 use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
 use grasp_core::matrix::Matrix;
@@ -30,7 +31,7 @@ use serde::{Deserialize, Serialize};
 pub const UNIT_TOLERANCE: f64 = 1e-6;
 
 /// A joint type.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum JointType {
     /// Rotation about `axis` through `origin`.
@@ -39,6 +40,12 @@ pub enum JointType {
     /// Translation along `axis`.
     Prismatic,
 }
+
+impl ByName for JointType {
+    const VARIANTS: &'static [Self] = &[Self::Revolute, Self::Prismatic];
+    const NAMES: &'static [&'static str] = &["revolute", "prismatic"];
+}
+grasp_core::deserialize_by_name!(JointType);
 
 /// One finger joint, in the object frame at the current configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

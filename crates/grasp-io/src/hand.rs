@@ -12,6 +12,7 @@ use crate::file::{ModelName, Options};
 use crate::frame::{Isometry3, UnitQuaternion, Vector3};
 use crate::geometry::{check_vec, contact_frame, UNIT_TOLERANCE};
 use crate::urdf::{nearest, Drive, JointKind, LimitSource, Pose, Robot};
+use grasp_core::by_name::ByName;
 use grasp_core::contact::ContactModel;
 use grasp_core::error::ProblemError;
 use grasp_core::matrix::Matrix;
@@ -90,7 +91,7 @@ impl HeldObject {
 }
 
 /// The frame a contact's position and normal are given in.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ContactFrame {
     /// The object frame (default).
@@ -99,6 +100,12 @@ pub enum ContactFrame {
     /// The frame of the contact's `link`, as tactile sensors report.
     Link,
 }
+
+impl ByName for ContactFrame {
+    const VARIANTS: &'static [Self] = &[Self::Object, Self::Link];
+    const NAMES: &'static [&'static str] = &["object", "link"];
+}
+grasp_core::deserialize_by_name!(ContactFrame);
 
 /// One contact on a link of the hand.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

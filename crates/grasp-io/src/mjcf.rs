@@ -304,8 +304,14 @@ impl Defaults {
             (None, None) => "main".to_string(),
             (None, Some(_)) => return Err(r.err(e, "a nested <default> needs a class attribute")),
         };
-        self.parent
+        let previous = self
+            .parent
             .insert(class.clone(), parent.map(str::to_string));
+        // MuJoCo refuses a repeated class name; the top level's `main` may recur across
+        // included files.
+        if previous.is_some() && parent.is_some() {
+            return Err(r.err(e, format!("a second <default class=\"{class}\">")));
+        }
         for c in &e.children {
             if c.name == "default" {
                 self.read(r, c, Some(&class))?;
@@ -659,6 +665,24 @@ fn moves_below(body: &El) -> bool {
         "body" | "frame" => moves_below(c),
         _ => false,
     })
+}
+
+/// Refuses a `class` or `childclass` that names no `<default>` class, as MuJoCo does:
+/// the element would otherwise silently take another class's values.
+fn check_classes(r: &Reader, d: &Defaults, elements: &[El]) -> Result<(), ProblemError> {
+    for e in elements.iter().filter(|e| e.name != "default") {
+        for key in ["class", "childclass"] {
+            if let Some(c) = e.attr(key).filter(|c| !d.parent.contains_key(*c)) {
+                let names = nearest(c, d.parent.keys().map(String::as_str));
+                return Err(r.err(
+                    e,
+                    format!("{key}=\"{c}\": expected a <default> class of this model ({names})"),
+                ));
+            }
+        }
+        check_classes(r, d, &e.children)?;
+    }
+    Ok(())
 }
 
 struct Ctx<'a> {
@@ -1296,6 +1320,7 @@ impl Robot {
                 }
             }
         }
+        check_classes(&r, &d, &top)?;
         let ctx = Ctx { r: &r, d: &d, c };
         let mut t = Tree {
             links: Vec::new(),

@@ -343,6 +343,10 @@ fn malformed_mjcf_is_a_named_error() {
         (spatial("<site site=\"s0\"/><geom geom=\"flat\"/><site site=\"s1\"/>"), "radius size > 0"),
         ("<mujoco><worldbody><body><joint name=\"a\"/><joint name=\"b\"/></body></worldbody><actuator><motor joint=\"a\" forcerange=\"2 1\" forcelimited=\"true\"/></actuator></mujoco>".to_string(), "expected lower < upper"),
         (body("<joint limited=\"true\"/>"), "limited=\"true\" without a range"),
+        // A misspelt class would silently take `main`'s values (an actuator's gear, say).
+        ("<mujoco><default><default class=\"finger\"/></default><worldbody><body childclass=\"fingr\"><joint/></body></worldbody></mujoco>".to_string(), "childclass=\"fingr\": expected a <default> class of this model (nearest: `finger`, `main`)"),
+        ("<mujoco><worldbody><body><joint name=\"a\"/></body></worldbody><actuator><motor class=\"big\" joint=\"a\"/></actuator></mujoco>".to_string(), "<motor> (line 1): class=\"big\""),
+        ("<mujoco><default><default class=\"a\"/><default class=\"b\"><default class=\"a\"/></default></default></mujoco>".to_string(), "a second <default class=\"a\">"),
         (format!("<mujoco><worldbody>{}{}</worldbody></mujoco>", "<body>".repeat(100_000), "</body>".repeat(100_000)), "nested"),
     ] {
         let msg = parse_err(&text);
