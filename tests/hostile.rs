@@ -78,6 +78,68 @@ fn trailing_bytes_after_the_object_are_refused() {
     );
 }
 
+/// A byte order mark, as Windows editors write, is not part of the JSON: the file
+/// solves, and an error's column is the one the editor shows.
+#[test]
+fn a_byte_order_mark_is_skipped() {
+    let f = temp_file("bom.json", &format!("\u{feff}{}", paper()));
+    let out = run(&["solve", f.to_str().unwrap(), "--format", "json"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let f = temp_file("bom-bad.json", "\u{feff}{\"wrench\": x}");
+    assert_refused(
+        &run(&["solve", f.to_str().unwrap()]),
+        &["line 1, column 12"],
+    );
+    let mut batch = Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
+        .args(["batch", "-"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    use std::io::Write;
+    let line = format!("\u{feff}{}\n", paper());
+    batch
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(line.as_bytes())
+        .unwrap();
+    let out = batch.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+}
+
+/// JSON readers keep the last of a repeated key; a joint position given twice is
+/// refused rather than half-read.
+#[test]
+fn a_joint_position_given_twice_is_refused() {
+    let text = std::fs::read_to_string(fixture("hands/allegro-pinch.json")).unwrap();
+    let text = text
+        .replace(
+            "\"../urdf/allegro/allegro_hand_right.urdf",
+            &format!("\"{}", fixture("urdf/allegro/allegro_hand_right.urdf")),
+        )
+        .replace(
+            "\"joint_0.0\": -0.0718,",
+            "\"joint_0.0\": -0.0718, \"joint_0.0\": 0.3,",
+        );
+    let f = temp_file("twice.json", &text);
+    assert_refused(
+        &run(&["solve", f.to_str().unwrap()]),
+        &["hand.joint_positions: `joint_0.0` is given twice"],
+    );
+}
+
 #[test]
 fn out_of_domain_numbers_name_field_value_and_range() {
     type Edit = Box<dyn Fn(&mut serde_json::Value)>;

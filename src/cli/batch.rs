@@ -4,8 +4,8 @@
 use super::{ModelArgs, OutputError};
 use anyhow::{Context, Result};
 use grasp_torque::{
-    solve_batch, BatchGrasp, BatchOptions, GraspProblem, ProblemError, ProblemParser, Solution,
-    SolverConfig, Status,
+    solve_batch, BatchGrasp, BatchOptions, GraspProblem, ProblemParser, Solution, SolverConfig,
+    Status,
 };
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
@@ -207,15 +207,7 @@ fn parse_line(
     base: &Path,
     model: &ModelArgs,
 ) -> Result<Parsed, String> {
-    let mut value: Value = serde_json::from_str(text).map_err(|e| {
-        ProblemError::Parse {
-            path: ".".into(),
-            message: e.to_string().split(" at line ").next().unwrap_or("").into(),
-            line: e.line(),
-            column: e.column(),
-        }
-        .to_string()
-    })?;
+    let mut value: Value = grasp_torque::file::from_json_str(text).map_err(|e| e.to_string())?;
     let wrenches = match value.as_object_mut().and_then(|o| o.remove("wrenches")) {
         None => Vec::new(),
         Some(w) => wrench_list(&w)?,

@@ -649,6 +649,12 @@ impl TorqueSolver for ExactSolver {
             .solve_raw(w, &WarmStart::default(), &mut self.lin);
         out.iterations += self.lin.iterations;
         let inscribed_infeasible = self.lin.status == Status::Infeasible;
+        // Inscribed polyhedra that hold the grasp prove it feasible: past this, a dual
+        // ray or infeasible circumscribed polyhedra can only be rounding. A ray proves
+        // that no torque within |value| / stationarity times the problem's scale holds
+        // the grasp, and a grasp whose torques are beyond that (a contact that can push
+        // in some direction only through an entry 1e-8 of the rest) has them.
+        let inscribed_feasible = self.lin.status == Status::Optimal;
         let retry = match self.lin.status {
             Status::Optimal => {
                 if self.newton_from_polyhedra(w, alpha, out) {
@@ -707,7 +713,7 @@ impl TorqueSolver for ExactSolver {
                 (newton.particular(w, alpha), b.as_slice())
             };
             ipm.solve(conic, rhs, &mut |ipm| {
-                if let Some(xp) = xp {
+                if let (Some(xp), false) = (xp, inscribed_feasible) {
                     ray = ray_of(ipm, conic, b, xp, dual, scratch);
                 }
                 ray.is_some()
@@ -731,7 +737,7 @@ impl TorqueSolver for ExactSolver {
                 return;
             }
         }
-        if let Some(reason) = self.dual_ray(w, alpha) {
+        if let Some(reason) = self.dual_ray(w, alpha).filter(|_| !inscribed_feasible) {
             return Self::infeasible(out, reason);
         }
         // (The method's own certificate, for the report: the best iterate's and
@@ -740,8 +746,10 @@ impl TorqueSolver for ExactSolver {
         if self.finish_from_best(w, alpha, out) {
             return;
         }
-        if let Some(reason) = self.outer_infeasible(w, FINE_SIDES) {
-            return Self::infeasible(out, reason);
+        if !inscribed_feasible {
+            if let Some(reason) = self.outer_infeasible(w, FINE_SIDES) {
+                return Self::infeasible(out, reason);
+            }
         }
         out.status = match end {
             IpmEnd::IterationLimit => Status::IterationLimit,
@@ -758,7 +766,11 @@ impl TorqueSolver for ExactSolver {
                 IpmEnd::Stalled | IpmEnd::Stopped => {
                     "the exact-cone interior-point method stalled".into()
                 }
-            } + &format!(" (the circumscribed polyhedra at N = {FINE_SIDES} admit a torque)"),
+            } + &if inscribed_feasible {
+                " (the inscribed polyhedra hold the grasp: it is feasible)".to_string()
+            } else {
+                format!(" (the circumscribed polyhedra at N = {FINE_SIDES} admit a torque)")
+            },
         });
     }
 }

@@ -473,9 +473,15 @@ impl ConicForm {
         // s_p = b − A x_p: zero on the equalities, the value's terms on the rest.
         sp.copy_from_slice(&b[..rows]);
         add_columns(sp, &self.a_cols, &xp[..nx], -1.0);
+        // Each miss against |b_i| + ‖a_i‖₁ ‖x_p‖∞, the normwise backward error of a
+        // least-squares point: its entries carry the equalities' conditioning times
+        // rounding, and a row whose coefficients on x_p's large entries are small (b_i
+        // itself rounding) must not count that as a miss of its own size.
+        let xmax = xp[..nx].iter().fold(0.0f64, |a, v| fmax(a, v.abs()));
         let mut particular = 0.0f64;
-        for (&bi, &si) in b[..eq].iter().zip(&sp[..eq]) {
-            let size = fmax(bi.abs(), (bi - si).abs()).max(f64::MIN_POSITIVE);
+        for (i, (&bi, &si)) in b[..eq].iter().zip(&sp[..eq]).enumerate() {
+            let row: f64 = self.a.row(i).iter().map(|v| v.abs()).sum();
+            let size = (bi.abs() + row * xmax).max(f64::MIN_POSITIVE);
             particular = fmax(particular, si.abs() / size);
         }
         let (mut value, mut vsize, mut zmax) = (0.0, f64::MIN_POSITIVE, f64::MIN_POSITIVE);
@@ -682,7 +688,7 @@ pub struct RayCheck {
     /// `zᵀ (b − A x_p)` on the inequality rows, against the size of its terms: negative
     /// for a certificate.
     pub value: f64,
-    /// How far `x_p` misses the equalities, against their terms.
+    /// How far `x_p` misses the equalities, each row against `|b_i| + ‖a_i‖₁ ‖x_p‖∞`.
     pub particular: f64,
     /// Whether `z` proves the problem infeasible: every measure within the tolerance
     /// and `value` below −[`RAY_MARGIN`] times it.

@@ -349,8 +349,11 @@ fn rectangular(name: &str, rows: &[Vec<f64>]) -> Result<Matrix, ProblemError> {
     Ok(Matrix::from_rows(rows, cols))
 }
 
-/// Deserialises `T` from JSON text, reporting the path of the field at fault.
+/// Deserialises `T` from JSON text, reporting the path of the field at fault. A
+/// leading byte order mark (which Windows editors write) is skipped, as editors show
+/// the text: line and column count from after it.
 pub fn from_json_str<'de, T: Deserialize<'de>>(text: &'de str) -> Result<T, ProblemError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut de = serde_json::Deserializer::from_str(text);
     let value = serde_path_to_error::deserialize(&mut de).map_err(|e| {
         let path = e.path().to_string();

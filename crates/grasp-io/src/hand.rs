@@ -23,6 +23,32 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+/// A JSON object read as a map whose keys must differ: JSON readers keep the last of
+/// a repeated key, which here would be a copy-paste slip passed over in silence.
+fn unique_keys<'de, D: serde::Deserializer<'de>>(d: D) -> Result<BTreeMap<String, f64>, D::Error> {
+    struct Unique;
+    impl<'de> serde::de::Visitor<'de> for Unique {
+        type Value = BTreeMap<String, f64>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("an object of joint names and positions")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(
+            self,
+            mut a: A,
+        ) -> Result<Self::Value, A::Error> {
+            let mut map = BTreeMap::new();
+            while let Some((k, v)) = a.next_entry::<String, f64>()? {
+                if map.contains_key(&k) {
+                    return Err(serde::de::Error::custom(format!("`{k}` is given twice")));
+                }
+                map.insert(k, v);
+            }
+            Ok(map)
+        }
+    }
+    d.deserialize_map(Unique)
+}
+
 /// `hand`: which robot, in which configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -30,8 +56,8 @@ pub struct HandSpec {
     /// A URDF path; a relative path is relative to the problem file.
     pub model: String,
     /// Positions of independent joints by name, in radians (revolute, continuous) or
-    /// metres (prismatic). A joint not listed sits at 0.
-    #[serde(default)]
+    /// metres (prismatic). A joint not listed sits at 0; one listed twice is an error.
+    #[serde(default, deserialize_with = "unique_keys")]
     pub joint_positions: BTreeMap<String, f64>,
     /// The acceleration of gravity on the fingers, `[gx, gy, gz]` in the root frame
     /// (m/s² in SI; a URDF's root link, an MJCF's world), or `"model"` for an MJCF

@@ -214,6 +214,61 @@ fn clarabel_claims_infeasibility_only_with_a_checked_ray() {
     }
 }
 
+/// Inscribed polyhedra that hold a grasp prove it feasible, however large its torques:
+/// a dual ray proves only that none lies within |value| / stationarity times the
+/// problem's scale. The paper's example with an entry of G made 1e-6 to 1e-8 of the
+/// rest (found by a mutation fuzz of the fixtures) is held only by torques 1e6 to 1e8
+/// times its scale; the native exact solver called the last infeasible by a ray whose
+/// torque terms cancelled to 1.4e-10. It now says `numerical_failure`, and why.
+#[test]
+fn a_grasp_the_inscribed_polyhedra_hold_is_never_infeasible() {
+    for eps in [1e-6, 1e-7, 1e-8] {
+        let mut p = fixture("paper-example");
+        p.grasp_matrix[(2, 6)] = -eps;
+        p.grasp_matrix[(3, 7)] = 0.12593805902239033;
+        let linear = run(&p, Backend::ActiveSet, Cones::Linear);
+        assert_eq!(linear.status, Status::Optimal, "{eps}");
+        let exact = run(&p, Backend::ActiveSet, Cones::Exact);
+        match exact.status {
+            Status::Optimal => assert!(exact.objective <= linear.objective, "{eps}"),
+            Status::NumericalFailure => assert!(
+                format!("{}", exact.reason.as_ref().unwrap()).contains("inscribed polyhedra hold"),
+                "{eps}: {:?}",
+                exact.reason
+            ),
+            s => panic!("{eps}: {s}, {:?}", exact.reason),
+        }
+    }
+}
+
+/// Clarabel's `infeasible` from the equalities alone needs their least-squares point to
+/// miss them by more than its own rounding: a finger joint 60 km from the object
+/// (geometry form, found by the same fuzz) makes the consistency rows ill-conditioned,
+/// and one row, whose coefficients on that point's large entries are rounding, was
+/// judged against its own size. Both cone kinds said infeasible; the native solver
+/// holds the grasp.
+#[cfg(feature = "clarabel")]
+#[test]
+fn clarabel_judges_the_equalities_miss_against_their_conditioning() {
+    let path = format!(
+        "{}/../../fixtures/geometry/pinch.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    for (finger, joint) in [(0, 1), (1, 0)] {
+        let mut g = v.clone();
+        let x = &mut g["fingers"][finger]["joints"][joint]["origin"][0];
+        *x = (x.as_f64().unwrap() * 1e6).into();
+        let p = grasp_torque::file::parse_problem(&g.to_string()).unwrap();
+        for cones in [Cones::Linear, Cones::Exact] {
+            assert_eq!(run(&p, Backend::ActiveSet, cones).status, Status::Optimal);
+            let c = run(&p, Backend::Clarabel, cones);
+            assert_ne!(c.status, Status::Infeasible, "{cones:?}: {:?}", c.reason);
+        }
+    }
+}
+
 /// Grasps at the edge of feasibility, found by a sweep five times wider than the one
 /// above (seeds 0..1500 at normal friction, 10000..11500 at a quarter of it): the exact
 /// cones cannot hold them, but the circumscribed polyhedra can, even at N = 256. There
