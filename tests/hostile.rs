@@ -258,6 +258,20 @@ fn an_endless_input_is_refused_quickly() {
     assert!(start.elapsed().as_secs() < 30);
 }
 
+/// A timing count is kept per solve for the median: one that no memory holds is
+/// refused (`sweep --repeats 99999999999` aborted allocating 800 GB).
+#[test]
+fn a_timing_count_beyond_memory_is_refused() {
+    let paper = fixture("paper-example.json");
+    for cmd in ["sweep", "bench"] {
+        let out = run(&[cmd, &paper, "--repeats", "99999999999"]);
+        assert_refused(
+            &out,
+            &["--repeats: expected 1 to 10000000, got 99999999999"],
+        );
+    }
+}
+
 #[test]
 fn a_full_disk_is_an_error_not_a_panic() {
     if !std::path::Path::new("/dev/full").exists() {

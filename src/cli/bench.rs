@@ -5,6 +5,7 @@
 use super::format::g;
 use super::{load, Format, ModelArgs};
 use anyhow::{bail, Result};
+use grasp_torque::sweep::MAX_REPEATS;
 use grasp_torque::{solve_into, Check, GraspSolver, Solution, WarmStart};
 use serde_json::json;
 use std::hint::black_box;
@@ -44,8 +45,11 @@ fn nudged(w: &[f64; 6]) -> [f64; 6] {
 }
 
 pub(crate) fn run(args: &BenchArgs) -> Result<u8> {
-    if !(1..=10_000_000).contains(&args.repeats) {
-        bail!("--repeats: expected 1 to 10000000, got {}", args.repeats);
+    if !(1..=MAX_REPEATS).contains(&args.repeats) {
+        bail!(
+            "--repeats: expected 1 to {MAX_REPEATS}, got {}",
+            args.repeats
+        );
     }
     let mut p = load(&args.problem)?;
     let config = args.model.configure(&mut p)?;

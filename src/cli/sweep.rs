@@ -4,7 +4,7 @@
 use super::format::g;
 use super::{load, Format, Spacing};
 use anyhow::{bail, Context, Result};
-use grasp_torque::sweep::{sweep, Sweep, SweepConfig};
+use grasp_torque::sweep::{sweep, Sweep, SweepConfig, MAX_REPEATS};
 use grasp_torque::{Backend, SfceSpacing};
 use plotters::coord::combinators::WithKeyPoints;
 use plotters::element::DashedPathElement;
@@ -83,8 +83,11 @@ pub(crate) fn run(args: &SweepArgs) -> Result<u8> {
         .backend
         .parse()
         .map_err(|e: String| anyhow::anyhow!("--backend: {e}"))?;
-    if args.repeats == 0 {
-        bail!("--repeats: expected at least 1");
+    if !(1..=MAX_REPEATS).contains(&args.repeats) {
+        bail!(
+            "--repeats: expected 1 to {MAX_REPEATS}, got {}",
+            args.repeats
+        );
     }
     let config = SweepConfig {
         sides,

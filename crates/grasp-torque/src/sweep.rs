@@ -20,9 +20,12 @@ pub struct SweepConfig {
     pub spacing: Option<SfceSpacing>,
     /// The backend for the linearised problems. Default: active-set.
     pub backend: Backend,
-    /// Timed solves per row; the median is reported. Default 21.
+    /// Timed solves per row, 1 to [`MAX_REPEATS`]; the median is reported. Default 21.
     pub repeats: usize,
 }
+
+/// Most timed solves per row: their times are kept for the median.
+pub const MAX_REPEATS: usize = 10_000_000;
 
 impl Default for SweepConfig {
     fn default() -> Self {
@@ -123,6 +126,14 @@ pub fn sweep(
         vec![p.linearization.latitudes]
     };
     p.validate()?;
+    if !(1..=MAX_REPEATS).contains(&config.repeats) {
+        return Err(grasp_core::ProblemError::invalid(
+            "repeats",
+            format!("1 to {MAX_REPEATS}"),
+            config.repeats,
+        )
+        .into());
+    }
     // One model serves every linearisation: only the cone blocks change.
     let model = Arc::new(GraspModel::new(&p, &SolverConfig::default().model)?);
     // σ* from the first compiled exact backend (the native one when compiled in), and
