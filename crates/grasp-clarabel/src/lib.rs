@@ -31,6 +31,13 @@ pub const CAPABILITIES: Capabilities = Capabilities {
 /// the core's final residual check.
 pub const RESIDUAL_TOLERANCE: f64 = 1e-7;
 
+/// The optimality certificate an answer Clarabel calls solved must pass (each measure
+/// relative to its terms, [`ConicForm::certificate`]) to be `optimal`, else it is
+/// `almost_optimal`: σ is then above the optimum by about the gap. At the default
+/// settings every solved answer of 6 000 random grasps at 1 to 10 times normal friction
+/// passes it; at 100 and 1 000 times, 2 % and 17 % do not.
+pub const OPTIMALITY_TOLERANCE: f64 = 1e-8;
+
 /// Settings passed to Clarabel. The defaults reach 1e-8 relative accuracy in σ on the
 /// reference cases. Tolerances apply to the scaled problem (see the crate docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -551,6 +558,28 @@ impl TorqueSolver for ClarabelSolver {
         if polished {
             (status, reason) = (Status::Optimal, None);
             out.method = Some("polished");
+        } else if status == Status::Optimal {
+            // "Solved" is Clarabel's own measure, in its equilibrated scaling: with
+            // friction coefficients in the hundreds it stops with σ up to 1.6e-5 above
+            // the optimum while its gap is within 1e-10. Its answer is checked against
+            // the conic form's certificate at this backend's accuracy; short of it, the
+            // answer is almost optimal, and says by how much.
+            if let Some(sol) = self.solver.as_ref().map(|s| &s.solution) {
+                let c = self.conic.certificate(
+                    &self.b,
+                    &sol.x,
+                    &sol.z,
+                    OPTIMALITY_TOLERANCE,
+                    &mut self.scratch,
+                );
+                if !c.passed {
+                    status = Status::AlmostOptimal;
+                    out.warnings.push(format!(
+                        "Clarabel's answer misses its optimality certificate (primal {:.1e}, dual {:.1e}, stationarity {:.1e}, gap {:.1e}; tolerance {OPTIMALITY_TOLERANCE:.0e}): σ may be above the optimum by about the gap, relative",
+                        c.primal, c.dual, c.stationarity, c.gap
+                    ));
+                }
+            }
         }
         out.status = status;
         out.reason = reason;
