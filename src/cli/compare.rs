@@ -49,6 +49,25 @@ pub(crate) fn sigma_tolerance(backend: Backend, solution: &Solution) -> f64 {
     }
 }
 
+/// Where one of two answers is optimal and the other almost (short of its optimality
+/// certificate: Clarabel's with friction in the hundreds), the almost optimal one is
+/// feasible, so its σ cannot be below the optimum; only that can be checked.
+fn almost_below(what: &str, first: &Run, r: &Run) -> Option<String> {
+    let (a, b) = (&first.solution, &r.solution);
+    let (opt, almost, who) = if a.status == Status::Optimal {
+        (a, b, r.backend)
+    } else {
+        (b, a, first.backend)
+    };
+    let tol = sigma_tolerance(first.backend, a).max(sigma_tolerance(r.backend, b));
+    (almost.objective < opt.objective * (1.0 - tol)).then(|| {
+        format!(
+            "{what}{who}'s almost optimal σ = {} is below the optimum {}",
+            almost.objective, opt.objective
+        )
+    })
+}
+
 struct Run {
     backend: Backend,
     cones: Cones,
@@ -115,6 +134,11 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
     let linear: Vec<&Run> = runs.iter().filter(|r| r.cones == Cones::Linear).collect();
     if let Some(first) = linear.first() {
         for r in &linear {
+            let (a, b) = (&first.solution, &r.solution);
+            if a.status != b.status && a.is_optimal() && b.is_optimal() {
+                problems.extend(almost_below("", first, r));
+                continue;
+            }
             if r.solution.status != first.solution.status {
                 problems.push(format!(
                     "{}: status {} but {} says {}",
@@ -172,21 +196,7 @@ pub(crate) fn run(args: &CompareArgs) -> Result<u8> {
         for r in &exact[1..] {
             let (a, b) = (&first.solution, &r.solution);
             if a.status != b.status && a.is_optimal() && b.is_optimal() {
-                // One answer short of its optimality certificate (Clarabel's with
-                // friction in the hundreds): feasible, so its σ is not below the
-                // optimum; only that can be checked.
-                let (opt, almost, who) = if a.status == Status::Optimal {
-                    (a, b, r.backend)
-                } else {
-                    (b, a, first.backend)
-                };
-                let tol = sigma_tolerance(first.backend, a).max(sigma_tolerance(r.backend, b));
-                if almost.objective < opt.objective * (1.0 - tol) {
-                    problems.push(format!(
-                        "exact cones: {who}'s almost optimal σ* = {} is below the optimum {}",
-                        almost.objective, opt.objective
-                    ));
-                }
+                problems.extend(almost_below("exact cones: ", first, r));
             } else if a.status != b.status {
                 problems.push(format!(
                     "exact cones: {} says {} but {} says {}",

@@ -649,11 +649,11 @@ impl TorqueSolver for ExactSolver {
             .solve_raw(w, &WarmStart::default(), &mut self.lin);
         out.iterations += self.lin.iterations;
         let inscribed_infeasible = self.lin.status == Status::Infeasible;
-        // Inscribed polyhedra that hold the grasp prove it feasible: past this, a dual
-        // ray or infeasible circumscribed polyhedra can only be rounding. A ray proves
-        // that no torque within |value| / stationarity times the problem's scale holds
-        // the grasp, and a grasp whose torques are beyond that (a contact that can push
-        // in some direction only through an entry 1e-8 of the rest) has them.
+        // Inscribed polyhedra that hold the grasp prove it feasible, so no infeasibility
+        // is looked for past them: a dual ray proves only that no torque within
+        // |value| / stationarity times the problem's scale holds the grasp, and a grasp
+        // can need more (a contact that pushes in some direction only through an entry
+        // of G 1e-8 of the rest needs torques 1e8 times the rest).
         let inscribed_feasible = self.lin.status == Status::Optimal;
         let retry = match self.lin.status {
             Status::Optimal => {
