@@ -18,7 +18,7 @@
 //! does not end with a certificate; infeasibility is decided before it runs (the
 //! inscribed and circumscribed polyhedra), so it has no homogeneous embedding.
 
-use crate::dense::{backward, cholesky, forward, qr_factor, schur};
+use crate::dense::{backward, forward, qr_factor, schur};
 use grasp_core::matrix::{dot, norm2, norm_inf};
 use grasp_core::{ConeKind, ConicForm, Matrix};
 
@@ -94,9 +94,6 @@ pub(crate) struct Ipm {
     e: Matrix,
     /// Inequality rows G (r × n).
     g: Matrix,
-    /// Orthant rows with a single nonzero (a torque limit): `(column, coefficient)`,
-    /// whose share of `Gᵀ W⁻² G` is diagonal.
-    single: Vec<Option<(usize, f64)>>,
     blocks: Vec<Block>,
     /// Degree of the cone (orthant rows + number of second-order cones).
     degree: f64,
@@ -155,8 +152,6 @@ struct Work {
     /// `L⁻¹ Eᵀ` (n × p, column j in `y_cols[j*n..]`) and the Schur factor (p × p).
     y_cols: Vec<f64>,
     schur: Vec<f64>,
-    /// One block's `W⁻¹ G_i` (d × n).
-    wg: Vec<f64>,
     /// `[√P; W⁻¹ G]` ((n + r) × n), for [`Ipm::factor_by_qr`].
     stack: Vec<f64>,
 }
@@ -190,7 +185,6 @@ impl Ipm {
         let mut blocks = Vec::new();
         let mut row = 0;
         let mut degree = 0.0;
-        let mut maxdim = 1;
         for cone in &form.cones {
             let dim = cone.dim();
             let start = in_rows.len();
@@ -205,7 +199,6 @@ impl Ipm {
                     in_rows.extend(row..row + dim);
                     blocks.push(Block::Soc { start, dim });
                     degree += 1.0;
-                    maxdim = maxdim.max(dim);
                 }
             }
             row += dim;
@@ -218,17 +211,6 @@ impl Ipm {
                 Matrix::from_fn(in_rows.len(), n, |i, j| form.a[(in_rows[i], j)]),
             ),
         };
-        let mut single = vec![None; g.nrows()];
-        for b in &blocks {
-            if let Block::Orthant { start, dim } = *b {
-                for (i, slot) in single.iter_mut().enumerate().skip(start).take(dim) {
-                    let nz: Vec<usize> = (0..n).filter(|&j| g[(i, j)] != 0.0).collect();
-                    if nz.len() == 1 {
-                        *slot = Some((nz[0], g[(i, nz[0])]));
-                    }
-                }
-            }
-        }
         let (p, r) = (e.nrows(), g.nrows());
         let ws = Work {
             be: vec![0.0; p],
@@ -264,7 +246,6 @@ impl Ipm {
             m: vec![0.0; n * n],
             y_cols: vec![0.0; n * p],
             schur: vec![0.0; p * p],
-            wg: vec![0.0; maxdim * n],
             stack: vec![0.0; (n + r) * n],
         };
         Self {
@@ -273,7 +254,6 @@ impl Ipm {
             pdiag,
             e,
             g,
-            single,
             blocks,
             degree,
             x: vec![0.0; n],
@@ -632,81 +612,10 @@ impl Ipm {
         true
     }
 
-    /// Forms and factors `P + Gᵀ W⁻² G` and the Schur complement of the equalities.
+    /// Factors `P + Gᵀ W⁻² G` ([`Self::factor_by_qr`]) and the Schur complement of the
+    /// equalities.
     fn factor(&mut self) -> bool {
-        let n = self.n;
-        let ws = &mut self.ws;
-        ws.m.iter_mut().for_each(|v| *v = 0.0);
-        for j in 0..n {
-            ws.m[j * n + j] = self.pdiag[j];
-        }
-        for (bi, blk) in self.blocks.iter().enumerate() {
-            let (start, dim) = blk.range();
-            match blk {
-                Block::Orthant { .. } => {
-                    for i in start..start + dim {
-                        let d = 1.0 / (ws.w[i] * ws.w[i]);
-                        if let Some((j, a)) = self.single[i] {
-                            ws.m[j * n + j] += d * a * a;
-                            continue;
-                        }
-                        let row = self.g.row(i);
-                        for (j, &aj) in row.iter().enumerate() {
-                            if aj == 0.0 {
-                                continue;
-                            }
-                            let c = d * aj;
-                            let mrow = &mut ws.m[j * n..j * n + n];
-                            for (mk, &ak) in mrow[j..].iter_mut().zip(&row[j..]) {
-                                *mk += c * ak;
-                            }
-                        }
-                    }
-                }
-                Block::Soc { .. } => {
-                    // G̃ = W⁻¹ G_i, column by column, then M += G̃ᵀ G̃: never W⁻² itself,
-                    // whose explicit form 2vvᵀ − J cancels near the cone's boundary.
-                    let w = &ws.w[start..start + dim];
-                    let eta = ws.eta[bi];
-                    let wg = &mut ws.wg[..dim * n];
-                    let (mut col, mut out) = ([0.0; SOC_MAX], [0.0; SOC_MAX]);
-                    for j in 0..n {
-                        for a in 0..dim {
-                            col[a] = self.g[(start + a, j)];
-                        }
-                        apply_winv(w, eta, &col[..dim], &mut out[..dim]);
-                        for a in 0..dim {
-                            wg[a * n + j] = out[a];
-                        }
-                    }
-                    for a in 0..dim {
-                        let row = &wg[a * n..a * n + n];
-                        for j in 0..n {
-                            let c = row[j];
-                            if c == 0.0 {
-                                continue;
-                            }
-                            let mrow = &mut ws.m[j * n..j * n + n];
-                            for (mk, &rk) in mrow[j..].iter_mut().zip(&row[j..]) {
-                                *mk += c * rk;
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        // Symmetrise. P is 2I on the torques, so M needs no regularisation there (one
-        // scaled with M's largest entry, which grows as 1/μ, would swamp P and stall
-        // the refinement); variables without curvature get a fixed small one.
-        for j in 0..n {
-            for k in 0..j {
-                ws.m[j * n + k] = ws.m[k * n + j];
-            }
-            if self.pdiag[j] == 0.0 {
-                ws.m[j * n + j] += 1e-12;
-            }
-        }
-        if !cholesky(&mut ws.m, n) && !self.factor_by_qr() {
+        if !self.factor_by_qr() {
             return false;
         }
         let ws = &mut self.ws;
@@ -714,7 +623,7 @@ impl Ipm {
         let p = self.e.nrows();
         schur(
             &ws.m,
-            n,
+            self.n,
             self.e.as_slice(),
             p,
             &mut ws.y_cols,
@@ -723,11 +632,12 @@ impl Ipm {
     }
 
     /// The factor of `P + Gᵀ W⁻² G` from a QR of `[√P; W⁻¹ G]`, never forming the
-    /// product: near the end W⁻² spans many orders of magnitude, and the formed matrix
-    /// can lose its positive definiteness to rounding (its Cholesky factor then fails,
-    /// although the matrix is at least P in exact arithmetic). The R factor has the
-    /// square root of its condition number. Into `ws.m` in [`cholesky`]'s layout; false
-    /// if the QR breaks down too.
+    /// product: near the end W⁻² spans many orders of magnitude, and the product's
+    /// Cholesky factor, with the square of R's condition number, loses the directions'
+    /// last digits first (the dual residual grows again, 5e-13 to 1e-4 over a few
+    /// iterations on grasps at a hundredth of normal friction, until the method
+    /// stalls) and then its positive definiteness. Into `ws.m` in the layout of
+    /// [`crate::dense::cholesky`]; false if the QR breaks down.
     fn factor_by_qr(&mut self) -> bool {
         let n = self.n;
         let ws = &mut self.ws;

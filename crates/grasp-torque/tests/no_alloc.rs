@@ -172,18 +172,25 @@ fn batch_wrenches_after_the_first_reuse_the_workers_buffers() {
     }
 }
 
-/// A grasp at the edge of feasibility that the interior-point method leaves
-/// undecided, so that the circumscribed polyhedra at N = 256 are tried (seed 525864 at
-/// a fiftieth of the friction, found by a sweep of seeds 500000..540000: μ from 0.006
-/// to 0.016, the inscribed polyhedra cannot hold it, and neither Newton nor the method
-/// finishes; the circumscribed polyhedra admit a torque, and it ends
-/// `numerical_failure`): they are built at its first solve and kept, so later solves
-/// allocate only the answer's reason (its message), not a polyhedral solver of a
-/// thousand rows again. (Seed 500889 at a hundredth, which this test used before, is
-/// held by the inscribed polyhedra: feasible, so no polyhedra are tried past them.)
+/// A grasp that the interior-point method leaves undecided, so that the circumscribed
+/// polyhedra at N = 256 are tried: the Allegro pinch with its thumb's contact a
+/// million kilometres up (found by a mutation fuzz; its lever arm 1e11 times the
+/// others', [G; Jᵀ] conditioned 4e10), which Clarabel solves and the native method
+/// does not; the polyhedra admit a torque, and it ends `numerical_failure`. They are
+/// built at its first solve and kept, so later solves allocate only the answer's
+/// reason (its message), not a polyhedral solver of a thousand rows again. (The random
+/// grasps this test used before, seeds 500889 and 525864 at a hundredth and a
+/// fiftieth of normal friction, are solved since the method factors by QR alone.)
 #[test]
 fn the_fine_polyhedra_are_built_once() {
-    let p = grasp_testkit::sweep_grasp(525864, 0.02);
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/hands");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("allegro-pinch.json")).unwrap())
+            .unwrap();
+    v["contacts"][2]["position"][2] = 1e9.into();
+    let p = grasp_torque::file::parse_problem_at(&v.to_string(), &dir)
+        .unwrap()
+        .problem;
     let config = SolverConfig {
         cones: Cones::Exact,
         ..Default::default()
