@@ -9,7 +9,8 @@ use serde::de::{Deserializer, Error, Visitor};
 use std::fmt;
 use std::marker::PhantomData;
 
-/// An enum without data whose variants are named in files.
+/// An enum without data whose variants are named in files, as its `Serialize` writes
+/// them (grasp-io's `enum_names_round_trip` test checks every one).
 pub trait ByName: Copy + 'static {
     /// Every variant, in the order of [`Self::NAMES`].
     const VARIANTS: &'static [Self];
@@ -44,7 +45,8 @@ impl<T: ByName> Visitor<'_> for NameVisitor<T> {
     }
 }
 
-/// Implements `Deserialize` by name for an enum that implements [`ByName`].
+/// Implements `Deserialize` by name for an enum that implements [`ByName`] (in a crate
+/// that depends on serde).
 #[macro_export]
 macro_rules! deserialize_by_name {
     ($t:ty) => {

@@ -1,5 +1,6 @@
 //! Geometry-form grasps build the same G and Jᵀ as the reference implementation.
 
+use grasp_core::by_name::ByName;
 use grasp_io::file::MatrixFile;
 use grasp_io::geometry::GeometryFile;
 use grasp_io::parse_problem;
@@ -81,4 +82,26 @@ fn palm_contacts_proximal_links_and_prismatic_joints() {
         .iter()
         .chain(&jt.row(1)[3..])
         .all(|&v| v == 0.0));
+}
+
+/// The names the problem files' enums are read by ([`ByName`]) are the ones they are
+/// written as.
+#[test]
+fn enum_names_round_trip() {
+    fn check<T>()
+    where
+        T: ByName + serde::Serialize + serde::de::DeserializeOwned + PartialEq + std::fmt::Debug,
+    {
+        assert_eq!(T::VARIANTS.len(), T::NAMES.len());
+        for (v, n) in T::VARIANTS.iter().zip(T::NAMES) {
+            let json = format!("\"{n}\"");
+            assert_eq!(serde_json::to_string(v).unwrap(), json);
+            assert_eq!(&serde_json::from_str::<T>(&json).unwrap(), v);
+        }
+    }
+    check::<grasp_core::InternalForces>();
+    check::<grasp_core::SfceSpacing>();
+    check::<grasp_io::file::ModelName>();
+    check::<grasp_io::geometry::JointType>();
+    check::<grasp_io::hand::ContactFrame>();
 }
