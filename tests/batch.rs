@@ -212,6 +212,79 @@ fn a_hand_lines_object_weighs_on_each_wrench() {
 }
 
 #[test]
+fn an_invalid_wrench_is_a_record_and_the_lines_other_wrenches_are_solved() {
+    let p: Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("fixtures/hand5-mixed.json")).unwrap(),
+    )
+    .unwrap();
+    let w: Vec<f64> = serde_json::from_value(p["wrench"].clone()).unwrap();
+    let nudged: Vec<f64> = w.iter().map(|v| v * 1.1).collect();
+    let bad = [
+        serde_json::json!([0, 0, 1e300, 0, 0, 0]),
+        serde_json::json!([1, 2, 3]),
+        serde_json::json!("x"),
+    ];
+    let mut mixed = p.clone();
+    mixed["wrenches"] = serde_json::json!([w, bad[0], nudged, bad[1], bad[2], w]);
+    let mut good = p.clone();
+    good["wrenches"] = serde_json::json!([w, nudged, w]);
+    let mut none_valid = p.clone();
+    none_valid["wrenches"] = serde_json::json!(bad);
+    // A line whose wrenches are all invalid still has its problem checked.
+    let mut bad_problem = none_valid.clone();
+    bad_problem["contacts"][0]["mu"] = serde_json::json!(-1);
+    let dir = temp_dir("bad-wrench");
+    let input = dir.join("in.jsonl");
+    std::fs::write(
+        &input,
+        format!("{mixed}\n{good}\n{none_valid}\n{bad_problem}\n"),
+    )
+    .unwrap();
+    let out = run(&["batch", input.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "an invalid wrench: exit 2");
+    let r = lines(&out);
+    let got: Vec<(u64, Option<u64>, &str)> = r
+        .iter()
+        .map(|r| {
+            (
+                r["line"].as_u64().unwrap(),
+                r["wrench"].as_u64(),
+                r["status"].as_str().unwrap(),
+            )
+        })
+        .collect();
+    let expected: Vec<(u64, Option<u64>, &str)> = vec![
+        (1, Some(0), "optimal"),
+        (1, Some(1), "invalid"),
+        (1, Some(2), "optimal"),
+        (1, Some(3), "invalid"),
+        (1, Some(4), "invalid"),
+        (1, Some(5), "optimal"),
+        (2, Some(0), "optimal"),
+        (2, Some(1), "optimal"),
+        (2, Some(2), "optimal"),
+        (3, Some(0), "invalid"),
+        (3, Some(1), "invalid"),
+        (3, Some(2), "invalid"),
+        (4, None, "invalid"),
+    ];
+    assert_eq!(got, expected);
+    // Each message names its wrench; the valid ones get the answers of the line
+    // without the invalid ones, in the same order.
+    for (i, k) in [(1, 1), (3, 3), (4, 4), (9, 0), (10, 1), (11, 2)] {
+        let e = r[i]["error"].as_str().unwrap();
+        assert!(e.starts_with(&format!("wrenches[{k}]: expected")), "{e}");
+    }
+    for (i, j) in [(0, 6), (2, 7), (5, 8)] {
+        assert_eq!(r[i]["objective"], r[j]["objective"], "{} vs {}", r[i], r[j]);
+        assert_eq!(r[i]["torque"], r[j]["torque"]);
+    }
+    assert!(r[12]["error"].as_str().unwrap().contains("mu"), "{}", r[12]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("13 results: 7 invalid"), "{stderr}");
+}
+
+#[test]
 fn a_malformed_line_is_a_record_and_the_batch_goes_on() {
     let good = std::fs::read_to_string(root().join("fixtures/hand3-pcwf.json"))
         .unwrap()

@@ -195,9 +195,12 @@ fn next_line(r: &mut impl BufRead, path: &Path) -> Result<Option<(Result<String,
     Ok(Some((text, consumed)))
 }
 
-/// A parsed line: its grasp and wrenches, and the solver configuration of the flags.
+/// A parsed line: its grasp and valid wrenches, why each listed wrench that is not
+/// valid is not (one entry per listed wrench, in order; empty without `wrenches`), and
+/// the solver configuration of the flags.
 struct Parsed {
     grasp: BatchGrasp,
+    slots: Vec<Option<String>>,
     config: SolverConfig,
 }
 
@@ -208,11 +211,11 @@ fn parse_line(
     model: &ModelArgs,
 ) -> Result<Parsed, String> {
     let mut value: Value = grasp_torque::file::from_json_str(text).map_err(|e| e.to_string())?;
-    let wrenches = match value.as_object_mut().and_then(|o| o.remove("wrenches")) {
-        None => Vec::new(),
-        Some(w) => wrench_list(&w)?,
+    let (listed, wrenches) = match value.as_object_mut().and_then(|o| o.remove("wrenches")) {
+        None => (false, Vec::new()),
+        Some(w) => (true, wrench_list(&w)?),
     };
-    let text = if wrenches.is_empty() {
+    let text = if !listed {
         std::borrow::Cow::Borrowed(text)
     } else {
         std::borrow::Cow::Owned(value.to_string())
@@ -220,48 +223,62 @@ fn parse_line(
     let loaded = parser.parse_at(&text, base).map_err(|e| e.to_string())?;
     // A hand-form line's `object` weighs on every wrench, as on its `wrench`.
     let weight = loaded.hand.as_ref().and_then(|h| h.object_weight);
-    let wrenches = match weight {
-        None => wrenches,
-        Some(weight) => wrenches
-            .into_iter()
-            .enumerate()
-            .map(|(k, mut w)| {
-                for (x, v) in w.iter_mut().zip(weight) {
-                    *x = grasp_torque::problem::flush_subnormal(*x + v);
-                }
-                if w.iter().all(|&x| grasp_torque::problem::in_domain(x)) {
-                    Ok(w)
-                } else {
-                    Err(format!(
-                        "wrenches[{k}] plus the object's weight: expected each component {}, got {w:?}",
-                        grasp_torque::problem::DOMAIN
-                    ))
-                }
-            })
-            .collect::<Result<_, _>>()?,
-    };
+    let mut slots = Vec::with_capacity(wrenches.len());
+    let mut valid = Vec::with_capacity(wrenches.len());
+    for (k, w) in wrenches.into_iter().enumerate() {
+        let w = w.and_then(|mut w| {
+            let Some(weight) = weight else { return Ok(w) };
+            for (x, v) in w.iter_mut().zip(weight) {
+                *x = grasp_torque::problem::flush_subnormal(*x + v);
+            }
+            if w.iter().all(|&x| grasp_torque::problem::in_domain(x)) {
+                Ok(w)
+            } else {
+                Err(format!(
+                    "wrenches[{k}] plus the object's weight: expected each component {}, got {w:?}",
+                    grasp_torque::problem::DOMAIN
+                ))
+            }
+        });
+        match w {
+            Ok(w) => {
+                valid.push(w);
+                slots.push(None);
+            }
+            Err(e) => slots.push(Some(e)),
+        }
+    }
     let mut problem: GraspProblem = loaded.problem;
     let config = model
         .configure(&mut problem)
         .map_err(|e| format!("{e:#}"))?;
     Ok(Parsed {
-        grasp: BatchGrasp { problem, wrenches },
+        grasp: BatchGrasp {
+            problem,
+            wrenches: valid,
+        },
+        slots,
         config,
     })
 }
 
-fn wrench_list(v: &Value) -> Result<Vec<[f64; 6]>, String> {
-    let bad = |what: String| {
+/// The listed wrenches, each parsed or why it is not a wrench: a bad wrench is a record
+/// of its own, and the line's other wrenches are solved. A `wrenches` that is not a
+/// non-empty list makes the whole line invalid.
+#[allow(clippy::type_complexity)]
+fn wrench_list(v: &Value) -> Result<Vec<Result<[f64; 6], String>>, String> {
+    let list = v.as_array().filter(|l| !l.is_empty()).ok_or_else(|| {
         format!(
-            "wrenches: expected a non-empty list of wrenches [Fx, Fy, Fz, Mx, My, Mz], each {}, got {what}",
-            grasp_torque::problem::DOMAIN
+            "wrenches: expected a non-empty list of wrenches [Fx, Fy, Fz, Mx, My, Mz], got {}",
+            if v.as_array().is_some() {
+                "an empty list".into()
+            } else {
+                v.to_string()
+            }
         )
-    };
-    let list = v.as_array().ok_or_else(|| bad(v.to_string()))?;
-    if list.is_empty() {
-        return Err(bad("an empty list".into()));
-    }
-    list.iter()
+    })?;
+    Ok(list
+        .iter()
         .enumerate()
         .map(|(k, w)| {
             let nums: Option<Vec<f64>> = w
@@ -276,10 +293,13 @@ fn wrench_list(v: &Value) -> Result<Vec<[f64; 6]>, String> {
                     a.copy_from_slice(&n);
                     Ok(a)
                 }
-                _ => Err(bad(format!("wrenches[{k}] = {w}"))),
+                _ => Err(format!(
+                    "wrenches[{k}]: expected [Fx, Fy, Fz, Mx, My, Mz], each {}, got {w}",
+                    grasp_torque::problem::DOMAIN
+                )),
             }
         })
-        .collect()
+        .collect())
 }
 
 /// Parses, solves and formats one chunk of lines, in parallel; records in input order.
@@ -301,8 +321,11 @@ fn solve_chunk(
         .collect();
     let n = chunk.len();
     let mut errors: Vec<Option<String>> = vec![None; n];
+    let mut slots: Vec<Vec<Option<String>>> = vec![Vec::new(); n];
     let mut grasps = Vec::with_capacity(n);
     let mut line_of = Vec::with_capacity(n);
+    // A line whose every listed wrench is invalid has nothing to solve.
+    let mut unsolved: Vec<Option<GraspProblem>> = vec![None; n];
     // Every line's configuration comes from the same flags (the problem's own options
     // travel with the problem): the first good line's serves all.
     let mut config = None;
@@ -310,6 +333,15 @@ fn solve_chunk(
         match p {
             Ok(p) => {
                 config.get_or_insert(p.config);
+                slots[i] = p.slots;
+                if !slots[i].is_empty() && p.grasp.wrenches.is_empty() {
+                    // (Still checked, as a solved line's problem is.)
+                    match p.grasp.problem.validate() {
+                        Ok(()) => unsolved[i] = Some(p.grasp.problem),
+                        Err(e) => errors[i] = Some(e.to_string()),
+                    }
+                    continue;
+                }
                 grasps.push(p.grasp);
                 line_of.push(i);
             }
@@ -335,27 +367,48 @@ fn solve_chunk(
                 .for_each(|&i| errors[i] = Some(e.to_string())),
         }
     }
-    let mut problem_of: Vec<Option<&GraspProblem>> = vec![None; n];
+    let mut problem_of: Vec<Option<&GraspProblem>> = unsolved.iter().map(Option::as_ref).collect();
     for (g, &i) in line_of.iter().enumerate() {
         problem_of[i] = Some(&grasps[g].problem);
     }
-    let records: Vec<(String, Vec<Status>)> = (0..n)
+    // Each line's records, and each record's status (`None`: invalid).
+    let records: Vec<(String, Vec<Option<Status>>)> = (0..n)
         .into_par_iter()
         .map(|i| {
             let line = chunk[i].0;
             match (&errors[i], problem_of[i]) {
-                (None, Some(p)) => {
+                (None, Some(p)) if slots[i].is_empty() => {
                     let sols = &results[i];
                     let text: String = sols
                         .iter()
                         .enumerate()
                         .map(|(k, s)| record(line, k, p, s, format))
                         .collect();
-                    (text, sols.iter().map(|s| s.status).collect())
+                    (text, sols.iter().map(|s| Some(s.status)).collect())
+                }
+                // Listed wrenches: the solutions of the valid ones in order, a record
+                // of its own for each invalid one.
+                (None, Some(p)) => {
+                    let mut sols = results[i].iter();
+                    let (mut text, mut statuses) = (String::new(), Vec::new());
+                    for (k, slot) in slots[i].iter().enumerate() {
+                        match (slot, slot.is_none().then(|| sols.next()).flatten()) {
+                            (None, Some(s)) => {
+                                text.push_str(&record(line, k, p, s, format));
+                                statuses.push(Some(s.status));
+                            }
+                            (e, _) => {
+                                let e = e.as_deref().unwrap_or("not solved");
+                                text.push_str(&error_record(line, Some(k), e, format));
+                                statuses.push(None);
+                            }
+                        }
+                    }
+                    (text, statuses)
                 }
                 (e, _) => (
-                    error_record(line, e.as_deref().unwrap_or("not solved"), format),
-                    Vec::new(),
+                    error_record(line, None, e.as_deref().unwrap_or("not solved"), format),
+                    vec![None],
                 ),
             }
         })
@@ -363,16 +416,13 @@ fn solve_chunk(
     let mut texts = Vec::with_capacity(records.len());
     for (text, statuses) in records {
         tally.lines += 1;
-        if statuses.is_empty() {
-            tally.invalid += 1;
-            tally.records += 1;
-        }
         for s in statuses {
             tally.records += 1;
-            if s == Status::Infeasible {
-                tally.infeasible += 1;
-            } else if !s.has_answer() {
-                tally.failed += 1;
+            match s {
+                None => tally.invalid += 1,
+                Some(Status::Infeasible) => tally.infeasible += 1,
+                Some(s) if !s.has_answer() => tally.failed += 1,
+                Some(_) => {}
             }
         }
         texts.push(text);
@@ -380,17 +430,23 @@ fn solve_chunk(
     texts
 }
 
-/// A line that could not be solved: its line number and the same message `solve`
-/// gives for the file.
-fn error_record(line: usize, message: &str, format: BatchFormat) -> String {
-    match format {
-        BatchFormat::Jsonl => {
-            format!(
-                "{{\"line\":{line},\"status\":\"invalid\",\"error\":{}}}\n",
-                json!(message)
-            )
-        }
-        BatchFormat::Csv => format!("{line},,invalid,,,,,,,,,{}\n", csv_field(message)),
+/// A line, or one of its listed wrenches, that could not be solved: its line number
+/// (and wrench) and the same message `solve` gives for the file.
+fn error_record(line: usize, wrench: Option<usize>, message: &str, format: BatchFormat) -> String {
+    match (format, wrench) {
+        (BatchFormat::Jsonl, None) => format!(
+            "{{\"line\":{line},\"status\":\"invalid\",\"error\":{}}}\n",
+            json!(message)
+        ),
+        (BatchFormat::Jsonl, Some(k)) => format!(
+            "{{\"line\":{line},\"wrench\":{k},\"status\":\"invalid\",\"error\":{}}}\n",
+            json!(message)
+        ),
+        (BatchFormat::Csv, k) => format!(
+            "{line},{},invalid,,,,,,,,,{}\n",
+            k.map(|k| k.to_string()).unwrap_or_default(),
+            csv_field(message)
+        ),
     }
 }
 
