@@ -425,9 +425,13 @@ class Solver:
     def solve(self, wrench: Optional[ArrayLike] = None, warm: bool = True) -> Result:
         if wrench is None:
             return self._s.solve(None, warm)
-        w = _real("wrench", wrench).reshape(-1)
+        a = _real("wrench", wrench)
+        w = a.reshape(-1)
         if w.shape != (6,):
-            raise ValueError(f"wrench: expected 6 numbers [Fx, Fy, Fz, Mx, My, Mz], got {w.size}")
+            raise ValueError(
+                f"wrench: expected 6 numbers [Fx, Fy, Fz, Mx, My, Mz], got {w.size} (shape {a.shape})"
+                + ("; solve_batch takes many wrenches" if a.ndim > 1 else "")
+            )
         return self._s.solve(w.tolist(), warm)
 
     def diagnose(self) -> Result:
