@@ -78,6 +78,30 @@ fn trailing_bytes_after_the_object_are_refused() {
     );
 }
 
+/// Nesting past serde_json's limit names where it starts (the first three segments of
+/// its path), not a hundred-odd `[0]`s.
+#[test]
+fn deep_nesting_names_where_it_starts() {
+    for (name, text, field) in [
+        ("deep-top.json", "[".repeat(300), "[0][0][0]…:"),
+        (
+            "deep-matrix.json",
+            format!("{{\"grasp_matrix\": {}", "[".repeat(300)),
+            "grasp_matrix[0][0]…:",
+        ),
+        (
+            "deep-contact.json",
+            format!("{{\"contacts\": [{{\"a\": {}", "{\"b\": ".repeat(300)),
+            "contacts[0].a…:",
+        ),
+    ] {
+        let f = temp_file(name, &text);
+        let out = run(&["solve", f.to_str().unwrap()]);
+        assert_refused(&out, &[field, "nested at most 128 deep"]);
+        assert!(String::from_utf8_lossy(&out.stderr).len() < 300);
+    }
+}
+
 /// A byte order mark, as Windows editors write, is not part of the JSON: the file
 /// solves, and an error's column is the one the editor shows.
 #[test]

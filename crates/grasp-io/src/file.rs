@@ -356,15 +356,28 @@ pub fn from_json_str<'de, T: Deserialize<'de>>(text: &'de str) -> Result<T, Prob
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut de = serde_json::Deserializer::from_str(text);
     let value = serde_path_to_error::deserialize(&mut de).map_err(|e| {
-        let path = e.path().to_string();
+        let mut path = e.path().to_string();
         let inner = e.into_inner();
         let (line, column) = (inner.line(), inner.column());
         let message = inner.to_string();
         // serde_json appends " at line L column C"; the variant carries them already.
-        let message = match message.rfind(" at line ") {
+        let mut message = match message.rfind(" at line ") {
             Some(i) => message[..i].to_string(),
             None => message,
         };
+        // Past serde_json's nesting limit the path is a hundred-odd segments: its first
+        // three say where the nesting starts.
+        if message == "recursion limit exceeded" {
+            let cut = path
+                .char_indices()
+                .filter(|&(i, c)| i > 0 && (c == '.' || c == '['))
+                .nth(2);
+            if let Some((i, _)) = cut {
+                path.truncate(i);
+                path.push('…');
+            }
+            message = "expected arrays and objects nested at most 128 deep, got deeper (recursion limit exceeded)".into();
+        }
         ProblemError::Parse {
             path,
             message,
