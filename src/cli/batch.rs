@@ -324,8 +324,6 @@ fn solve_chunk(
     let mut slots: Vec<Vec<Option<String>>> = vec![Vec::new(); n];
     let mut grasps = Vec::with_capacity(n);
     let mut line_of = Vec::with_capacity(n);
-    // A line whose every listed wrench is invalid has nothing to solve.
-    let mut unsolved: Vec<Option<GraspProblem>> = vec![None; n];
     // Every line's configuration comes from the same flags (the problem's own options
     // travel with the problem): the first good line's serves all.
     let mut config = None;
@@ -335,10 +333,10 @@ fn solve_chunk(
                 config.get_or_insert(p.config);
                 slots[i] = p.slots;
                 if !slots[i].is_empty() && p.grasp.wrenches.is_empty() {
-                    // (Still checked, as a solved line's problem is.)
-                    match p.grasp.problem.validate() {
-                        Ok(()) => unsolved[i] = Some(p.grasp.problem),
-                        Err(e) => errors[i] = Some(e.to_string()),
+                    // Nothing to solve, but the problem is still checked, as a solved
+                    // line's is.
+                    if let Err(e) = p.grasp.problem.validate() {
+                        errors[i] = Some(e.to_string());
                     }
                     continue;
                 }
@@ -367,7 +365,7 @@ fn solve_chunk(
                 .for_each(|&i| errors[i] = Some(e.to_string())),
         }
     }
-    let mut problem_of: Vec<Option<&GraspProblem>> = unsolved.iter().map(Option::as_ref).collect();
+    let mut problem_of: Vec<Option<&GraspProblem>> = vec![None; n];
     for (g, &i) in line_of.iter().enumerate() {
         problem_of[i] = Some(&grasps[g].problem);
     }
@@ -387,13 +385,15 @@ fn solve_chunk(
                     (text, sols.iter().map(|s| Some(s.status)).collect())
                 }
                 // Listed wrenches: the solutions of the valid ones in order, a record
-                // of its own for each invalid one.
-                (None, Some(p)) => {
+                // of its own for each invalid one (a line with no valid one was not
+                // solved).
+                (None, p) if !slots[i].is_empty() => {
                     let mut sols = results[i].iter();
                     let (mut text, mut statuses) = (String::new(), Vec::new());
                     for (k, slot) in slots[i].iter().enumerate() {
-                        match (slot, slot.is_none().then(|| sols.next()).flatten()) {
-                            (None, Some(s)) => {
+                        let solved = slot.is_none().then(|| sols.next()).flatten();
+                        match (slot, p.zip(solved)) {
+                            (None, Some((p, s))) => {
                                 text.push_str(&record(line, k, p, s, format));
                                 statuses.push(Some(s.status));
                             }
