@@ -429,3 +429,41 @@ fn hostile_lines_are_records_never_crashes() {
     assert!(errors[4].contains("hand.model"), "{}", errors[4]);
     assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
 }
+
+/// A line past the 64 MiB limit is a record and the batch goes on after it; an input
+/// with no line end within 1 GiB (`/dev/zero`) ends the batch at once, not after
+/// reading forever.
+#[test]
+fn an_over_long_line_is_a_record_and_an_endless_one_ends_the_batch() {
+    let good = std::fs::read_to_string(root().join("fixtures/paper-example.json"))
+        .unwrap()
+        .replace('\n', " ");
+    let path = temp_dir("long").join("in.jsonl");
+    let mut input = format!("{good}\n").into_bytes();
+    input.resize(input.len() + (65 << 20), b' ');
+    input.extend(format!("\n{good}\n").into_bytes());
+    std::fs::write(&path, input).unwrap();
+    let out = run(&["batch", path.to_str().unwrap()]);
+    std::fs::remove_file(&path).unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let r = lines(&out);
+    let status: Vec<&str> = r.iter().map(|r| r["status"].as_str().unwrap()).collect();
+    assert_eq!(status, ["optimal", "invalid", "optimal"]);
+    assert_eq!(r[2]["line"], 3);
+    let error = r[1]["error"].as_str().unwrap();
+    assert!(
+        error.contains("at most 67108864 bytes, got a longer one"),
+        "{error}"
+    );
+
+    if Path::new("/dev/zero").exists() {
+        let start = std::time::Instant::now();
+        let out = run(&["batch", "/dev/zero"]);
+        assert_eq!(out.status.code(), Some(2));
+        let r = lines(&out);
+        assert_eq!(r.len(), 1);
+        let error = r[0]["error"].as_str().unwrap();
+        assert!(error.contains("read no further"), "{error}");
+        assert!(start.elapsed().as_secs() < 60);
+    }
+}

@@ -278,8 +278,31 @@ fn sizes_are_limited_before_allocating() {
 fn an_endless_input_is_refused_quickly() {
     let start = std::time::Instant::now();
     let out = run(&["solve", "/dev/zero"]);
-    assert_refused(&out, &["at most"]);
+    assert_refused(&out, &["/dev/zero", "expected at most 67108864 bytes"]);
+    // A robot description is read with the same limit, and the message names it.
+    let out = run(&["hand", "/dev/zero"]);
+    assert_refused(&out, &["/dev/zero", "expected at most 67108864 bytes"]);
+    let mut p: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(fixture("hands/allegro-pinch.json")).unwrap(),
+    )
+    .unwrap();
+    p["hand"]["model"] = "/dev/zero".into();
+    assert_refused(
+        &solve_json(&p, "endless-model.json", &[]),
+        &["hand.model", "/dev/zero", "expected at most 67108864 bytes"],
+    );
     assert!(start.elapsed().as_secs() < 30);
+}
+
+#[test]
+fn a_robot_description_that_is_not_text_names_its_file() {
+    let f = temp_file("latin1.urdf", "");
+    std::fs::write(&f, b"<robot name=\"h\xe9\"/>").unwrap();
+    let path = f.to_str().unwrap();
+    assert_refused(
+        &run(&["hand", path]),
+        &[path, "expected UTF-8 text, got invalid UTF-8 at byte 14"],
+    );
 }
 
 /// A timing count is kept per solve for the median: one that no memory holds is

@@ -969,6 +969,10 @@ class Hand:
         return HandBatchResult(*outs, _errors(errors, single), list(names), F)
 
 
+# 2³¹ float64 numbers (16 GiB) in the arrays `synthetic_grasps` returns, at most.
+_MAX_SYNTHETIC_NUMBERS = 1 << 31
+
+
 def synthetic_grasps(
     batch: int,
     fingers: int = 3,
@@ -981,13 +985,18 @@ def synthetic_grasps(
     (``n = 3·fingers``, contact frames with z along the inward normal), serial fingers
     of revolute joints, and the sphere's weight (50–500 g) plus a small disturbance.
     ``wrenches=K > 0`` adds K load directions per grasp (± 10 % of the weight along
-    each axis, cycling)."""
-    batch = _count("batch", batch, 0)
-    fingers = _count("fingers", fingers, 1)
-    joints_per_finger = _count("joints_per_finger", joints_per_finger, 1)
-    wrenches = _count("wrenches", wrenches, 0)
-    rng = np.random.default_rng(seed)
+    each axis, cycling). A hand past the solver's limits (256 contacts, 256 joints) or
+    arrays of more than 2³¹ numbers in all raise ``ValueError`` naming the argument."""
+    # No larger hand can be solved, and no larger batch held in memory.
+    fingers = _count("fingers", fingers, 1, _native.MAX_CONTACTS)
+    joints_per_finger = _count(
+        "joints_per_finger", joints_per_finger, 1, _native.MAX_JOINTS // fingers
+    )
+    wrenches = _count("wrenches", wrenches, 0, _MAX_SYNTHETIC_NUMBERS)
     n, m = 3 * fingers, fingers * joints_per_finger
+    per_grasp = (6 + m) * n + 6 * max(wrenches, 1)
+    batch = _count("batch", batch, 0, _MAX_SYNTHETIC_NUMBERS // per_grasp)
+    rng = np.random.default_rng(seed)
     G = np.zeros((batch, 6, n))
     JT = np.zeros((batch, m, n))
     radius = rng.uniform(0.03, 0.06, batch)

@@ -6,13 +6,15 @@ from typing import Any, Optional, final
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["Problem", "Solver", "Result", "Hand", "solve_batch", "default_threads", "backends", "INVALID", "MAX_THREADS", "VERSION"]
+__all__ = ["Problem", "Solver", "Result", "Hand", "solve_batch", "default_threads", "backends", "INVALID", "MAX_THREADS", "MAX_JOINTS", "MAX_CONTACTS", "VERSION"]
 
 _F64 = npt.NDArray[np.float64]
 _I8 = npt.NDArray[np.int8]
 
 INVALID: int
 MAX_THREADS: int
+MAX_JOINTS: int
+MAX_CONTACTS: int
 VERSION: str
 
 def backends() -> list[str]: ...

@@ -1429,6 +1429,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(backends, m)?)?;
     m.add("INVALID", INVALID)?;
     m.add("MAX_THREADS", grasp_torque::batch::MAX_THREADS)?;
+    m.add("MAX_JOINTS", grasp_torque::problem::MAX_JOINTS)?;
+    m.add("MAX_CONTACTS", grasp_torque::problem::MAX_CONTACTS)?;
     m.add("VERSION", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

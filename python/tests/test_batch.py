@@ -199,6 +199,13 @@ def test_synthetic_grasps_checks_its_counts():
     with pytest.raises(ValueError, match="fingers: expected a whole number"):
         gt.synthetic_grasps(2, fingers=2.5)
     assert gt.synthetic_grasps(0)[0].shape == (0, 6, 9)
+    # Past the solver's limits or the memory's, a ValueError, not numpy's MemoryError.
+    with pytest.raises(ValueError, match=f"fingers: expected at most {gt._native.MAX_CONTACTS}, got 300"):
+        gt.synthetic_grasps(1, fingers=300)
+    with pytest.raises(ValueError, match="joints_per_finger: expected at most 2, got 3"):
+        gt.synthetic_grasps(1, fingers=100)
+    with pytest.raises(ValueError, match="batch: expected at most [0-9]+, got 1000000000000"):
+        gt.synthetic_grasps(10**12)
 
 
 def test_preallocated_outputs_are_filled_in_place():

@@ -109,17 +109,23 @@ pub(crate) fn run(args: &BatchArgs) -> Result<u8> {
     let mut tally = Tally::default();
     let mut line_no = 0;
     let mut read = 0u64;
-    loop {
+    let mut ended = false;
+    while !ended {
         let mut chunk = Vec::with_capacity(CHUNK_LINES);
         while chunk.len() < CHUNK_LINES {
-            let Some((text, bytes)) = next_line(&mut reader, &args.input)? else {
+            let Some(line) = next_line(&mut reader, &args.input)? else {
+                ended = true;
                 break;
             };
             line_no += 1;
-            read += bytes;
+            read += line.bytes;
+            ended = line.last;
             // Blank lines are skipped, but still counted for line numbers.
-            if !matches!(&text, Ok(t) if t.trim().is_empty()) {
-                chunk.push((line_no, text));
+            if !matches!(&line.text, Ok(t) if t.trim().is_empty()) {
+                chunk.push((line_no, line.text));
+            }
+            if ended {
+                break;
             }
         }
         if chunk.is_empty() {
@@ -143,10 +149,21 @@ pub(crate) fn run(args: &BatchArgs) -> Result<u8> {
 /// The longest line read: a problem file's limit.
 const MAX_LINE_BYTES: u64 = grasp_torque::file::MAX_FILE_BYTES;
 
-/// The next line (without its end), or why it is not one, and the bytes consumed;
-/// `None` at the end of input. A line longer than the limit is skipped unread.
-#[allow(clippy::type_complexity)]
-fn next_line(r: &mut impl BufRead, path: &Path) -> Result<Option<(Result<String, String>, u64)>> {
+/// The most of one over-long line skipped in search of its end (1 GiB): past it the
+/// input is taken as endless (`/dev/zero`) and read no further.
+const MAX_SKIP_BYTES: u64 = 16 * MAX_LINE_BYTES;
+
+/// One line read: its text (without its end) or why it is not one, the bytes
+/// consumed, and whether reading stops after it.
+struct Line {
+    text: Result<String, String>,
+    bytes: u64,
+    last: bool,
+}
+
+/// The next line; `None` at the end of input. A line longer than the limit is
+/// skipped unread, up to [`MAX_SKIP_BYTES`].
+fn next_line(r: &mut impl BufRead, path: &Path) -> Result<Option<Line>> {
     let mut buf = Vec::new();
     let n = r
         .by_ref()
@@ -158,30 +175,30 @@ fn next_line(r: &mut impl BufRead, path: &Path) -> Result<Option<(Result<String,
     }
     let mut consumed = n as u64;
     if buf.last() != Some(&b'\n') && n as u64 > MAX_LINE_BYTES {
-        // Skip the rest of the line without keeping it.
-        loop {
-            let avail = r
-                .fill_buf()
+        // Skip the rest of the line, a mebibyte at a time.
+        let mut ended = false;
+        while !ended && consumed <= MAX_SKIP_BYTES {
+            buf.clear();
+            let n = r
+                .by_ref()
+                .take(1 << 20)
+                .read_until(b'\n', &mut buf)
                 .with_context(|| format!("{}", path.display()))?;
-            if avail.is_empty() {
-                break;
-            }
-            let (used, done) = match avail.iter().position(|&b| b == b'\n') {
-                Some(i) => (i + 1, true),
-                None => (avail.len(), false),
-            };
-            r.consume(used);
-            consumed += used as u64;
-            if done {
-                break;
-            }
+            consumed += n as u64;
+            ended = n == 0 || buf.last() == Some(&b'\n');
         }
-        return Ok(Some((
-            Err(format!(
-                "(input): expected a line of at most {MAX_LINE_BYTES} bytes, got a longer one"
-            )),
-            consumed,
-        )));
+        let text = if ended {
+            format!("(input): expected a line of at most {MAX_LINE_BYTES} bytes, got a longer one")
+        } else {
+            format!(
+                "(input): expected a line of at most {MAX_LINE_BYTES} bytes, got one with no end within {MAX_SKIP_BYTES} bytes (an endless input?): the input is read no further"
+            )
+        };
+        return Ok(Some(Line {
+            text: Err(text),
+            bytes: consumed,
+            last: !ended,
+        }));
     }
     while matches!(buf.last(), Some(b'\n' | b'\r')) {
         buf.pop();
@@ -192,7 +209,11 @@ fn next_line(r: &mut impl BufRead, path: &Path) -> Result<Option<(Result<String,
             e.utf8_error().valid_up_to()
         )
     });
-    Ok(Some((text, consumed)))
+    Ok(Some(Line {
+        text,
+        bytes: consumed,
+        last: false,
+    }))
 }
 
 /// A parsed line: its grasp and valid wrenches, why each listed wrench that is not

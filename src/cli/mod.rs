@@ -172,7 +172,10 @@ pub(crate) fn parse_list(flag: &str, text: &str) -> Result<Vec<f64>> {
                 .parse()
                 .with_context(|| format!("{flag}: value {i} (`{}`) is not a number", s.trim()))?;
             if !v.is_finite() {
-                bail!("{flag}: value {i} must be finite");
+                bail!(
+                    "{flag}: value {i}: expected a finite number, got `{}`",
+                    s.trim()
+                );
             }
             Ok(v)
         })

@@ -510,9 +510,11 @@ fn kind_of(v: &serde_json::Value) -> &'static str {
 /// limits, and it stops an endless input (`/dev/zero`) at once.
 pub const MAX_FILE_BYTES: u64 = 64 << 20;
 
-/// Reads at most [`MAX_FILE_BYTES`] of UTF-8 text from `path`.
+/// Reads at most [`MAX_FILE_BYTES`] of UTF-8 text from `path`. A longer file or one
+/// that is not UTF-8 is an [`ProblemError::Io`] naming the path, as an unreadable one
+/// is: the caller (a problem file, a hand's model, an MJCF include) says what it is.
 pub fn read_limited(path: &Path) -> Result<String, ProblemError> {
-    use std::io::Read;
+    use std::io::{Error, ErrorKind, Read};
     let io = |error| ProblemError::Io {
         path: path.display().to_string(),
         error,
@@ -523,18 +525,19 @@ pub fn read_limited(path: &Path) -> Result<String, ProblemError> {
         .read_to_end(&mut bytes)
         .map_err(io)?;
     if bytes.len() as u64 > MAX_FILE_BYTES {
-        return Err(ProblemError::invalid(
-            "(input)",
-            format!("a problem file of at most {MAX_FILE_BYTES} bytes"),
-            "a larger input",
-        ));
+        return Err(io(Error::new(
+            ErrorKind::FileTooLarge,
+            format!("expected at most {MAX_FILE_BYTES} bytes (64 MiB), got more"),
+        )));
     }
     String::from_utf8(bytes).map_err(|e| {
-        ProblemError::invalid(
-            "(input)",
-            "UTF-8 text (JSON)",
-            format!("invalid UTF-8 at byte {}", e.utf8_error().valid_up_to()),
-        )
+        io(Error::new(
+            ErrorKind::InvalidData,
+            format!(
+                "expected UTF-8 text, got invalid UTF-8 at byte {}",
+                e.utf8_error().valid_up_to()
+            ),
+        ))
     })
 }
 
