@@ -3,6 +3,7 @@ same grasps written as hand-form dicts and solved one by one."""
 
 import copy
 import json
+import os
 import pickle
 
 import numpy as np
@@ -153,6 +154,10 @@ def test_a_hand_reports_its_file_and_pickles():
         gt.Hand(HANDS)
     with pytest.raises(ValueError, match="allegro-pinch.json: .*not well-formed XML"):
         gt.Hand(HANDS / "allegro-pinch.json")
+    # The size and encoding limits name the file itself, not a problem file's field.
+    if os.path.exists("/dev/zero"):
+        with pytest.raises(ValueError, match="^could not read /dev/zero: expected at most 67108864 bytes"):
+            gt.Hand("/dev/zero")
 
 
 def test_the_planner_example_runs(root):

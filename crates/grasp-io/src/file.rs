@@ -415,9 +415,7 @@ pub fn parse_problem(text: &str) -> Result<GraspProblem, ProblemError> {
 /// Parses a problem file's text in any of the three forms; a hand-form file's relative
 /// `hand.model` is taken relative to `base` (the problem file's folder).
 pub fn parse_problem_at(text: &str, base: &Path) -> Result<Loaded, ProblemError> {
-    parse_with(text, base, &|path| {
-        crate::hand::load_robot(path).map(Arc::new)
-    })
+    parse_with(text, base, &|path| Robot::load(path).map(Arc::new))
 }
 
 /// Parses many problems that may share robot files (a batch, a planner's loop): each
@@ -439,14 +437,15 @@ impl ProblemParser {
         parse_with(text, base, &|path| self.robot(path))
     }
 
-    /// The robot file at `path` (URDF or MJCF), parsed on first use.
+    /// The robot file at `path` (URDF or MJCF), parsed on first use. An unreadable
+    /// file is a [`ProblemError::Io`] naming it.
     pub fn robot(&self, path: &Path) -> Result<Arc<Robot>, ProblemError> {
         // Held while a new robot parses, so that threads asking for it parse it once.
         let mut robots = self.robots.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(r) = robots.get(path) {
             return Ok(r.clone());
         }
-        let r = Arc::new(crate::hand::load_robot(path)?);
+        let r = Arc::new(Robot::load(path)?);
         robots.insert(path.to_path_buf(), r.clone());
         Ok(r)
     }
@@ -481,7 +480,7 @@ fn parse_with(
             .map(plain),
         (false, false, true) => {
             let file = from_json_str::<crate::hand::HandFile>(text)?;
-            let built = file.build(&*robot(&file.model_path(base))?)?;
+            let built = file.build(&*robot(&file.model_path(base)).map_err(crate::hand::model_error)?)?;
             Ok(Loaded {
                 problem: built.problem,
                 hand: Some(built.report),

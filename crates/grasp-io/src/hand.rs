@@ -385,14 +385,20 @@ pub struct HandProblem {
 
 /// Reads and parses a hand's URDF; an unreadable file is an error of `hand.model`.
 pub(crate) fn load_robot(path: &Path) -> Result<Robot, ProblemError> {
-    Robot::load(path).map_err(|e| match e {
+    Robot::load(path).map_err(model_error)
+}
+
+/// A robot file's error as a problem file's: an unreadable file is an error of its
+/// field `hand.model`.
+pub(crate) fn model_error(e: ProblemError) -> ProblemError {
+    match e {
         ProblemError::Io { path, error } => ProblemError::invalid(
             "hand.model",
             "a readable URDF file (a relative path is relative to the problem file)",
             format!("{path}: {error}"),
         ),
         other => other,
-    })
+    }
 }
 
 fn label(i: usize, name: &Option<String>) -> String {
