@@ -122,6 +122,48 @@ fn compare_accepts_an_almost_optimal_answer_above_the_optimum() {
     );
 }
 
+/// `table` on the bundled hands, with torque limits and transmissions (it panicked on
+/// the Allegro and Shadow hands): a row per hand, its columns the model's torque
+/// variables, or a named refusal for passive joint torques.
+#[test]
+fn table_answers_every_bundled_hand() {
+    for name in [
+        "allegro-pinch",
+        "shadow-tripod",
+        "ability-tripod",
+        "aero-pinch",
+    ] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_grasp-torque"))
+            .args(["table", &fixture(&format!("hands/{name}.json"))])
+            .args(["--format", "json"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("panicked"), "{name}: {err}");
+        if name == "aero-pinch" {
+            assert_eq!(out.status.code(), Some(2), "{err}");
+            assert!(
+                err.contains("does not model passive joint torques"),
+                "{err}"
+            );
+            continue;
+        }
+        assert_eq!(out.status.code(), Some(0), "{name}: {err}");
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let row = &v["objects"][0];
+        let len = |k: &str| row[k].as_array().unwrap().len();
+        assert_eq!(len("before"), len("joints"), "{row}");
+        assert_eq!(len("after"), len("joints"), "{row}");
+        let (after, before) = (
+            row["sigma_after"].as_f64().unwrap(),
+            row["sigma_before"].as_f64().unwrap(),
+        );
+        if row["baseline_note"].is_null() {
+            assert!(after <= before * (1.0 + 1e-9), "{name}: {after} > {before}");
+        }
+    }
+}
+
 #[test]
 fn table_markdown_rows_match_their_headers_and_csv_refuses_mixed_joints() {
     let files = [

@@ -65,7 +65,7 @@ pub(crate) fn compare(name: String, p: &GraspProblem) -> Result<Row> {
     let model = Arc::new(GraspModel::new(p, &ModelOptions::default())?);
     let torque_qp = TorqueQp::linearized(model.clone(), &p.linearization);
     let after = native(torque_qp.clone(), &p.wrench)?;
-    let fs = ForceSpaceQp::new(model, &p.linearization)?;
+    let fs = ForceSpaceQp::new(model.clone(), &p.linearization)?;
     let mut base = Solution::default();
     ForceSpaceSolver::new(fs, ActiveSetSettings::default())?.solve(&p.wrench, &mut base);
     if after.status != Status::Optimal || base.status != Status::Optimal {
@@ -82,7 +82,9 @@ pub(crate) fn compare(name: String, p: &GraspProblem) -> Result<Row> {
                 .map_or(String::new(), |r| r.to_string())
         );
     }
-    let before = p.jacobian_transpose.mul_vec(&base.torque);
+    // The model's Jᵀ maps forces to its torque variables: with a transmission, the
+    // actuator forces `T⁺ Jᵀ f` (the baseline keeps Jᵀ f in the range of T).
+    let before = model.jacobian_transpose.mul_vec(&base.torque);
     // Is the baseline torque admissible under the torque model (consistency, cones)?
     let mut check = Solution {
         torque: before.clone(),
@@ -102,7 +104,7 @@ pub(crate) fn compare(name: String, p: &GraspProblem) -> Result<Row> {
     });
     Ok(Row {
         name,
-        joints: (0..p.joints()).map(|j| p.joint_name(j)).collect(),
+        joints: (0..p.actuated()).map(|j| p.actuator_name(j)).collect(),
         before,
         after: after.torque,
         baseline_note,
@@ -206,7 +208,7 @@ pub(crate) fn run(args: &TableArgs) -> Result<u8> {
             );
         }
         TableFormat::Markdown => {
-            outln!("Absolute joint torques (N·m): before = contact-force optimum mapped through Jᵀ, after = torque-space optimum.");
+            outln!("Absolute joint torques (N·m; actuator forces for a hand with a transmission): before = contact-force optimum mapped through Jᵀ (and T⁺), after = torque-space optimum.");
             // One table per set of joints: a column is one joint.
             let mut groups: Vec<(&Vec<String>, Vec<&Row>)> = Vec::new();
             for r in &rows {

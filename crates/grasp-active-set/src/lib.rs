@@ -26,8 +26,8 @@
 use grasp_core::linalg::{decompose, orthonormal_columns, RankThreshold};
 use grasp_core::matrix::{add_columns, dot, min_value, norm_inf, write_columns};
 use grasp_core::{
-    Capabilities, ConicForm, EqFactors, ForceSpaceQp, LeastDistance, Matrix, Reason, RowId,
-    Solution, Status, TorqueQp, TorqueSolver, WarmStart,
+    Capabilities, ConicForm, EqFactors, ForceSpaceQp, InequalityRows, LeastDistance, Matrix,
+    Reason, RowId, Solution, Status, TorqueQp, TorqueSolver, WarmStart,
 };
 
 mod dense;
@@ -554,13 +554,22 @@ impl Engine {
             out
         };
         // A row no torque affects: its norm in y is at rounding level of H D⁻¹'s. A
-        // torque limit's row is τ_j itself, whose norm in y is at most dinv_j: its own
-        // rounding level, whatever the cone rows' scale (forces in units 1e150 times
-        // smaller make those 1e150 times longer; the limit is as binding).
+        // torque limit's row is judged at its own rounding level, whatever the cone
+        // rows' scale (forces in units 1e150 times smaller make those 1e150 times
+        // longer; the limit is as binding): on torques (H factored) the row is τ_j
+        // itself, whose norm in y is dinv_j; on contact forces (the force-space QP,
+        // H formed) it is `Jᵀ_j f`, of norm ‖H_i D⁻¹‖.
         let hscale = qp.max_row_norm(&dinv);
-        let zero = 1e3 * f64::EPSILON * (m as f64) * hscale.max(f64::MIN_POSITIVE);
-        let zero_of = |i: usize| match qp.rows[i] {
-            RowId::TorqueLimit { joint, .. } => 1e3 * f64::EPSILON * (m as f64) * dinv[joint],
+        let rounding = 1e3 * f64::EPSILON * (m as f64);
+        let zero = rounding * hscale.max(f64::MIN_POSITIVE);
+        let zero_of = |i: usize| match (qp.rows[i], qp.h) {
+            (RowId::TorqueLimit { joint, .. }, InequalityRows::Factored(_)) => {
+                rounding * dinv[joint]
+            }
+            (RowId::TorqueLimit { .. }, InequalityRows::Formed(h)) => {
+                let row: Vec<f64> = h.row(i).iter().zip(&dinv).map(|(v, d)| v * d).collect();
+                rounding * grasp_core::matrix::norm2(&row)
+            }
             _ => zero,
         };
         let (mut h_row, mut fixed) = (Vec::with_capacity(rows), Vec::new());
