@@ -1,13 +1,15 @@
 #!/usr/bin/env python3
-"""Mutated robot files under the bundled hand problems, through `grasp-torque solve`.
+"""Mutated robot files under the bundled hand problems, through `grasp-torque solve`,
+`hand` and `table`.
 
 Each seed copies one hand's model folder (its URDF or MJCF with the files it
 includes) to a temporary folder, edits one of its XML files 1 to 8 times (an
 attribute set to a hostile value such as NaN, inf, 1e400, '' or the wrong arity, or to
 another element's value of the same attribute; an element removed or duplicated; an
 attribute deleted), sometimes adds gravity, and solves the hand problem on it with
-linear and exact cones. It reports every run that panics, hangs (30 s), exits with a
-code other than 0, 2, 3 or 4, fails without a message, or prints a non-finite number.
+linear and exact cones, lists the model (`hand`) and tabulates it (`table`). It
+reports every run that panics, hangs (30 s), exits with a code other than 0, 2, 3 or
+4, fails without a message, or prints a non-finite number.
 
 Usage: python3 scripts/fuzz_models.py FROM COUNT   (after `cargo build --release`)
 """
@@ -91,9 +93,15 @@ def main():
                 problem["hand"]["gravity"] = [0, 0, -9.81]
             path = os.path.join(tmp, "problem.json")
             json.dump(problem, open(path, "w"))
-            for cones in ("linear", "exact"):
+            runs = {
+                "linear": ["solve", path, "--cones", "linear"],
+                "exact": ["solve", path, "--cones", "exact"],
+                "hand": ["hand", copy],
+                "table": ["table", path],
+            }
+            for cones, args in runs.items():
                 try:
-                    r = subprocess.run([BIN, "solve", path, "--format", "json", "--cones", cones],
+                    r = subprocess.run([BIN, *args, "--format", "json"],
                                        capture_output=True, text=True, timeout=30)
                     code, out, err = r.returncode, r.stdout, r.stderr
                 except subprocess.TimeoutExpired:
