@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Hostile calls into the Python package: `solve_batch`, `Hand.solve_batch`, `Solver`
-and `Problem.from_arrays` with arrays mutated per seed (an entry set to NaN, inf, a
+"""Hostile calls into the Python package: `solve_batch`, `Hand.solve_batch`,
+`Hand.frames`, `Hand.arrays`, `Solver` and `Problem.from_arrays` with arrays mutated
+per seed (an entry set to NaN, inf, a
 subnormal, 1e308 or 0; the array scaled by 1e±300; other dtypes: float32, int, complex,
 object, bool; Fortran order or reversed; a row or axis dropped or added; empty; nested
 lists; a string) and keywords set to wrong values. Every call must return or raise
@@ -60,7 +61,7 @@ def main():
         b = rnd.choice([0, 1, 3])
         arrays = {"G": np.repeat(g0[None], b, 0), "JT": np.repeat(jt0[None], b, 0), "W": np.repeat(w0[None], b, 0)}
         cones = rnd.choice(["linear", "exact"])
-        which = rnd.choice(["G", "JT", "W", "keyword", "keyword", "hand", "solver", "problem"])
+        which = rnd.choice(["G", "JT", "W", "keyword", "keyword", "hand", "solver", "problem", "frames", "arrays"])
         try:
             ok = True
             if which in arrays:
@@ -86,6 +87,26 @@ def main():
                 if rnd.random() < 0.3:
                     w = mutate(rnd, w)
                 ok = finite_where_optimal(hand.solve_batch(q, w, tips, cones=cones))
+            elif which == "frames":
+                q = mutate(rnd, np.zeros((max(b, 1), len(hand.joint_names))))
+                names = rnd.choice([[], ["link_3.0_tip"], ["link_3.0_tip", "base_link"], ["nope"], [1], "link_3.0_tip"])
+                P, R = hand.frames(q, names)
+                ok = bool(np.all(np.isfinite(P)) and np.all(np.isfinite(R)))
+            elif which == "arrays":
+                q = mutate(rnd, np.zeros((max(b, 1), len(hand.joint_names))))
+                tips = [{"link": "link_3.0_tip", "model": "pcwf", "mu": 0.6, "position": [0, 0, 0.01], "normal": [0, 0, -1]},
+                        {"link": "link_15.0_tip", "model": "pcwf", "mu": 0.6, "position": [0, 0, 0.01], "normal": [0, 0, -1]}]
+                extra = {}
+                k = rnd.choice(["positions", "normals", "object_pose", "gravity", "object_mass", None])
+                if k == "object_mass":
+                    extra[k] = rnd.choice([-1, 0, np.nan, 1e300, "x", 0.2])
+                elif k is not None:
+                    shape = {"positions": (len(q), 2, 3), "normals": (len(q), 2, 3),
+                             "object_pose": (len(q), 7), "gravity": (len(q), 3)}[k]
+                    extra[k] = mutate(rnd, np.ones(shape))
+                a = hand.arrays(q, tips, **extra)
+                good = [i for i in range(len(q)) if i not in a.errors]
+                ok = bool(np.all(np.isfinite(a.G[good])) and np.all(np.isfinite(a.JT[good])))
             elif which == "solver":
                 s = gt.Solver("fixtures/hand3-pcwf.json", cones=cones)
                 for _ in range(4):

@@ -1224,6 +1224,10 @@ impl Hand {
         }
         let pos = contiguous_out("positions", &mut pos, &[b, k, 3])?;
         let rot = contiguous_out("rotations", &mut rot, &[b, k, 3, 3])?;
+        if k == 0 {
+            // No frames asked for: the (B, 0, 3) and (B, 0, 3, 3) outputs are complete.
+            return Ok(());
+        }
         py.detach(|| {
             let mut qb = vec![0.0; q.ncols()];
             for (row, (pb, rb)) in pos

@@ -243,6 +243,9 @@ def test_frames_place_the_contacts_as_the_hand_batch_does(name):
     names = [c.get("site", c.get("link")) for c in contacts]
     P, R = hand.frames(q, names)
     assert P.shape == (8, len(names), 3) and R.shape == (8, len(names), 3, 3)
+    # No names, no frames (it panicked): empty arrays of the same leading shape.
+    P0, R0 = hand.frames(q, [])
+    assert P0.shape == (8, 0, 3) and R0.shape == (8, 0, 3, 3)
     assert np.allclose(np.einsum("bkij,bkil->bkjl", R, R), np.eye(3), atol=1e-14)
     G = hand.arrays(q, contacts).G
     for b in range(8):
