@@ -494,13 +494,12 @@ def _out(name: str, given: Optional[NDArray[Any]], shape: Tuple[int, ...], dtype
     return given
 
 
-def _wrenches(W: Array) -> Tuple[Array, bool]:
-    """``W`` as ``[B, K, 6]``, and whether it was ``[B, 6]``."""
-    if W.ndim == 2:
-        return W.reshape(W.shape[0], 1, W.shape[1]), True
-    if W.ndim == 3:
-        return W, False
-    raise ValueError(f"W: expected shape (B, 6) or (B, K, 6), got {W.shape}")
+def _wrenches(W: Array, B: int) -> Tuple[Array, bool]:
+    """``W`` as ``[B, K, 6]``, and whether it was ``[B, 6]``; its shape as given in the
+    message when it is neither."""
+    if W.ndim in (2, 3) and W.shape[0] == B and W.shape[-1] == 6:
+        return (W.reshape(B, 1, 6), True) if W.ndim == 2 else (W, False)
+    raise ValueError(f"W: expected shape ({B}, 6) or ({B}, K, 6), got {W.shape}")
 
 
 def _outputs(
@@ -604,7 +603,7 @@ def solve_batch(
         raise ValueError(f"G: expected shape (B, 6, n), got {g.shape}")
     if jt.ndim != 3:
         raise ValueError(f"JT: expected shape (B, m, n), got {jt.shape}")
-    W3, single = _wrenches(_real("W", W))
+    W3, single = _wrenches(_real("W", W), g.shape[0])
     B, K, m = g.shape[0], W3.shape[1], jt.shape[1]
     shared, per_grasp = None, None
     if transmission is not None:
@@ -932,7 +931,7 @@ class Hand:
             if held is None:
                 raise ValueError("W: expected [B, 6] or [B, K, 6] wrenches (None only with object_mass)")
             W = np.zeros((q.shape[0], 6))
-        W3, single = _wrenches(_real("W", W))
+        W3, single = _wrenches(_real("W", W), q.shape[0])
         B, K = q.shape[0], W3.shape[1]
         spec = {
             "contacts": _contacts(contacts),
