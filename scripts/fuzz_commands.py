@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """Mutated problem files of every form through every subcommand of the binary.
 
-Each seed takes one bundled problem (matrix, geometry or hand form), sets one to three
-of its numbers or values to a hostile value (NaN, ±1e308, a subnormal, a string, null,
-an array or object in a number's place) or scales one by 10^±1 to 10^±9, and runs one
-of `solve` (linear, exact, free internal forces, Clarabel's exact cones), `compare`,
-`sweep`, `export-qp`, `bench`, `build` or `table` on it. It reports every run that
+Each seed takes one bundled problem (matrix, geometry or hand form), makes one to
+three edits (a number or value set to a hostile value: NaN, ±1e308, a subnormal, a
+string, null, an array or object in a number's place; a number scaled by 10^±1 to
+10^±9; a key deleted; an array's element removed or repeated, or the array emptied),
+and runs one of `solve` (linear, exact, free internal forces, Clarabel's exact cones),
+`compare`, `sweep`, `export-qp`, `bench`, `build` or `table` on it. It reports every run that
 panics, hangs (60 s), exits with a code other than 0, 2, 3, 4 or 5 (`compare`'s
 disagreement), fails without a message, or prints a non-finite number.
 
@@ -56,10 +57,42 @@ def leaves(v, path=()):
         yield path
 
 
+def containers(v, path=()):
+    if isinstance(v, (dict, list)):
+        yield path, v
+        for k, x in (v.items() if isinstance(v, dict) else enumerate(v)):
+            yield from containers(x, path + (k,))
+
+
+def reshape(problem, rnd):
+    """A key deleted, or an array's element removed or repeated, or the array emptied."""
+    path, c = rnd.choice([pc for pc in containers(problem) if pc[1]])
+    name = ".".join(map(str, path)) or "(top level)"
+    if isinstance(c, dict):
+        k = rnd.choice(sorted(c))
+        del c[k]
+        return f"deleted {name}.{k}"
+    i = rnd.randrange(len(c))
+    op = rnd.choice(["remove", "repeat", "empty"])
+    if op == "remove":
+        del c[i]
+    elif op == "repeat":
+        c.insert(i, json.loads(json.dumps(c[i])))
+    else:
+        c.clear()
+    return f"{op} {name}[{i}]"
+
+
 def mutate(problem, rnd):
     paths = [p for p in leaves(problem) if "description" not in p and "name" not in p]
     done = []
     for _ in range(rnd.choice([1, 1, 2, 3])):
+        if rnd.random() < 0.25:
+            done.append(reshape(problem, rnd))
+            paths = [p for p in leaves(problem) if "description" not in p and "name" not in p]
+            continue
+        if not paths:
+            break
         path = rnd.choice(paths)
         parent = problem
         for k in path[:-1]:
