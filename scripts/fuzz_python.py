@@ -1,21 +1,25 @@
 #!/usr/bin/env python3
 """Hostile calls into the Python package: `solve_batch`, `Hand.solve_batch`,
 `Hand.frames`, `Hand.arrays`, `Solver` and `Problem.from_arrays` with arrays mutated
-per seed (an entry set to NaN, inf, a
-subnormal, 1e308 or 0; the array scaled by 1e±300; other dtypes: float32, int, complex,
-object, bool; Fortran order or reversed; a row or axis dropped or added; empty; nested
-lists; a string) and keywords set to wrong values. Every call must return or raise
+per seed (an entry set to NaN, inf, a subnormal, 1e308 or 0; the array scaled by
+1e±300; other dtypes: float32, int, complex, object, bool; Fortran order or reversed; a
+row or axis dropped or added; empty; nested lists; a string) and keywords set to wrong
+values, and `Problem.from_dict` on the bundled problems edited as
+`scripts/fuzz_commands.py` edits them. Every call must return or raise
 `ValueError`/`TypeError` with a message; an `optimal` answer must be finite.
 
 Usage: python3 scripts/fuzz_python.py FROM COUNT   (with the package installed, from the
 repository root)
 """
+import json
+import os
 import random
 import sys
 
 import numpy as np
 
 import grasp_torque as gt
+from fuzz_commands import FILES, mutate as edit_problem
 
 HOSTILE = [np.nan, np.inf, -np.inf, 1e308, -1e308, 1e-320, 0.0, -0.0, 1e13, 1e12, 1e-12, 5e-324]
 
@@ -61,7 +65,8 @@ def main():
         b = rnd.choice([0, 1, 3])
         arrays = {"G": np.repeat(g0[None], b, 0), "JT": np.repeat(jt0[None], b, 0), "W": np.repeat(w0[None], b, 0)}
         cones = rnd.choice(["linear", "exact"])
-        which = rnd.choice(["G", "JT", "W", "keyword", "keyword", "hand", "solver", "problem", "frames", "arrays"])
+        which = rnd.choice(["G", "JT", "W", "keyword", "keyword", "hand", "solver", "problem", "frames", "arrays",
+                            "dict"])
         try:
             ok = True
             if which in arrays:
@@ -107,6 +112,13 @@ def main():
                 a = hand.arrays(q, tips, **extra)
                 good = [i for i in range(len(q)) if i not in a.errors]
                 ok = bool(np.all(np.isfinite(a.G[good])) and np.all(np.isfinite(a.JT[good])))
+            elif which == "dict":
+                # A bundled problem of any form, edited as scripts/fuzz_commands.py does.
+                source = rnd.choice(FILES)
+                d = json.load(open(source))
+                edit_problem(d, rnd)
+                r = gt.Solver(gt.Problem.from_dict(d, base=os.path.dirname(source)), cones=cones).solve()
+                ok = r.status != "optimal" or bool(np.all(np.isfinite(r.torque)))
             elif which == "solver":
                 s = gt.Solver("fixtures/hand3-pcwf.json", cones=cones)
                 for _ in range(4):
