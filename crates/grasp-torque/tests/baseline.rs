@@ -117,7 +117,7 @@ fn the_baseline_answers_every_bundled_problem() {
             let r = grasp_torque::matrix::dot(e, f);
             assert!(r.abs() <= tol(e, 0.0), "{path:?}: (E f)[{i}] = {r}");
         }
-        // Every cone and limit row, the limits on the model's torque variables.
+        // Every row of the baseline's own: the cones, minimum normal forces and limits.
         for (i, &c) in c0.iter().enumerate() {
             let h = rows.row(i);
             let v = grasp_torque::matrix::dot(h, f) - c;
