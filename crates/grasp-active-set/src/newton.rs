@@ -467,6 +467,20 @@ impl Newton {
         self.nu_cone.iter_mut().for_each(|v| *v = 0.0);
     }
 
+    /// Whether y = 0 meets every row and cone (within Newton's feasibility tolerance),
+    /// with `y` and the slacks set there.
+    fn origin_holds(&mut self) -> bool {
+        let eq = self.eq;
+        self.y.iter_mut().for_each(|v| *v = 0.0);
+        self.s[eq..].copy_from_slice(&self.b_red[eq..]);
+        self.slacks_at_y = true;
+        let feas = self.feasibility_tolerance();
+        (self.orth.0..self.orth.1).all(|i| self.s[i] >= -feas)
+            && self.socs.iter().all(|&(start, dim)| {
+                soc_excess(self.s[start], &self.s[start + 1..start + dim]) <= feas
+            })
+    }
+
     /// Solves from `self.x` and the guess in `active`/`piece`; on success `x` and `z`
     /// hold a primal-dual pair for the caller's certificate.
     ///
@@ -485,6 +499,19 @@ impl Newton {
         self.slacks_at_y = false;
         self.left_apex.iter_mut().for_each(|v| *v = false);
         if !hot {
+            if self.origin_holds() {
+                // The unconstrained minimum y = 0 (τ = x_p) holds the grasp: it is the
+                // optimum, taken exactly. Dropping the guess's pieces one change at a
+                // time reaches it only to rounding (a step through the factor of 2I
+                // leaves ε‖y‖, all of the gradient there, which the certificate's
+                // stationarity, relative to its own terms, refuses), if at all within
+                // MAX_CHANGES.
+                self.active.iter_mut().for_each(|a| *a = false);
+                self.piece.iter_mut().for_each(|p| *p = Piece::Inside);
+                self.reset_multipliers();
+                self.finish(form);
+                return true;
+            }
             // (N's rows are Nᵀ's columns.)
             self.y.iter_mut().for_each(|v| *v = 0.0);
             add_columns(&mut self.y, self.null_basis.as_slice(), &self.x, 1.0);

@@ -222,12 +222,31 @@ pub fn fixture_paths(dirs: &[&str]) -> Vec<std::path::PathBuf> {
 
 /// The reference cases of `shared/reference/cases.json` (copied to `tests/data/`).
 pub fn reference_cases() -> Vec<serde_json::Value> {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../tests/data/reference-cases.json"
-    );
-    let text = std::fs::read_to_string(path).expect("reference cases");
-    let v: serde_json::Value = serde_json::from_str(&text).expect("reference JSON");
+    cases_in("reference-cases.json")
+}
+
+/// Grasps in the reference cases' format with optima from cvxpy and DAQP, written by
+/// `scripts/oracle_cases.py`: `tests/data/oracle-cases.json`, or the file
+/// `GRASP_ORACLE_CASES` names (another draw of the script, or grasps of your own).
+pub fn oracle_cases() -> Vec<serde_json::Value> {
+    match std::env::var("GRASP_ORACLE_CASES") {
+        Ok(path) => cases_at(&path),
+        Err(_) => cases_in("oracle-cases.json"),
+    }
+}
+
+/// The case list of `tests/data/NAME`.
+fn cases_in(name: &str) -> Vec<serde_json::Value> {
+    cases_at(&format!(
+        "{}/../../tests/data/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+}
+
+/// The case list of the file at `path`.
+fn cases_at(path: &str) -> Vec<serde_json::Value> {
+    let text = std::fs::read_to_string(path).expect("a case file");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("a case file's JSON");
     v["cases"].as_array().expect("a case list").clone()
 }
 

@@ -50,6 +50,67 @@ fn reference_exact_objectives_are_reproduced_natively() {
     eprintln!("worst relative difference to the exact references: {worst:.2e}; {newton} of 41 by Newton, the rest by the interior-point fallback");
 }
 
+/// A grasp whose wrench the passive forces hold with no torque at all
+/// (`tests/data/held-at-zero-torque.json`, an unseen grasp `scripts/oracle_cases.py`
+/// drew: five SFCl contacts, `Z1 w` inside every cone but outside the polyhedra):
+/// σ* = 0 at τ = 0. It ended `numerical_failure`: Newton, dropping the polyhedra's
+/// pieces, reached y = 0 only to rounding (a step through the factor of 2I leaves
+/// ε‖y‖), which the certificate's stationarity, relative to its own terms, refused;
+/// and the interior-point iterate, which only nears 0, failed the gap. Clarabel ends
+/// `almost_optimal` at σ ≈ 4e-16. A cold solve now takes y = 0 first where it holds.
+#[test]
+fn a_grasp_held_without_torque_is_optimal_at_zero() {
+    let path = format!(
+        "{}/../../tests/data/held-at-zero-torque.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let p = grasp_torque::load_problem(&path).unwrap();
+    let s = run(&p, Backend::ActiveSet, Cones::Exact);
+    assert_eq!(s.status, Status::Optimal, "{:?}", s.reason);
+    assert_eq!(s.method, Some("newton"));
+    assert!(s.torque.iter().all(|t| *t == 0.0), "{:?}", s.torque);
+    assert_eq!(s.objective, 0.0);
+    // Checked here from G, w and the friction coefficients: G f = w to rounding, and
+    // each force strictly inside its SFCl cone, ‖f_t‖/μ + |mz|/μ_t < fz, or (two of
+    // the five contacts) unloaded: within a thousand roundings of the largest force.
+    let (g, f) = (&p.grasp_matrix, &s.contact_forces);
+    for (i, w) in p.wrench.iter().enumerate() {
+        let row = g.row(i);
+        let gf: f64 = row.iter().zip(f).map(|(a, b)| a * b).sum();
+        let size: f64 = row.iter().zip(f).map(|(a, b)| (a * b).abs()).sum();
+        assert!(
+            (gf - w).abs() <= 64.0 * f64::EPSILON * size.max(w.abs()),
+            "row {i}"
+        );
+    }
+    let largest = f.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let mut unloaded = 0;
+    for (c, fc) in p.contacts.iter().zip(f.chunks_exact(4)) {
+        let grasp_torque::ContactModel::SfcLinear { mu, mu_torsion } = *c else {
+            panic!("{c:?}")
+        };
+        if fc.iter().all(|v| v.abs() <= 1e3 * f64::EPSILON * largest) {
+            unloaded += 1;
+            continue;
+        }
+        let load = fc[0].hypot(fc[1]) / mu + fc[3].abs() / mu_torsion;
+        assert!(load < fc[2], "{fc:?}");
+    }
+    assert_eq!(unloaded, 2);
+    // The polyhedra, inside the cones, need torque.
+    assert!(run(&p, Backend::ActiveSet, Cones::Linear).objective > 0.0);
+    // In a control loop, from an answer that needs torque back to this wrench.
+    let mut solver = GraspSolver::new(&p, &exact_config()).unwrap();
+    let mut pushed = p.wrench;
+    pushed[0] += 1.0;
+    let s = solver.resolve(&pushed).unwrap();
+    assert_eq!(s.status, Status::Optimal, "{:?}", s.reason);
+    assert!(s.objective > 0.0);
+    let s = solver.resolve(&p.wrench).unwrap();
+    assert_eq!(s.status, Status::Optimal, "{:?}", s.reason);
+    assert_eq!((s.method, s.objective), (Some("newton"), 0.0));
+}
+
 /// `solve FILE --cones exact` picks the native solver by default.
 #[test]
 fn exact_cones_use_the_native_solver_by_default() {

@@ -1,0 +1,302 @@
+#!/usr/bin/env python3
+"""Grasps no one here has solved, in the format of `shared/reference/cases.json`, with
+optima from cvxpy: the oracle of `cargo test --test oracle_cases`.
+
+Each case is drawn at random as the reference cases were (`shared/reference/README.md`,
+"Geometry convention"): 2 to 5 fingers of 2 to 4 revolute joints, one contact per
+finger (two on a quarter of them) on a sphere of radius 4 cm (normals into the object,
+tilted by about 0.15 rad), one
+contact model per case (FPC mixes, PCwF, SFCl, SFCe or mixed), friction drawn per
+contact, and a wrench that holds 0.1 to 1 kg against gravity with a random push and
+twist. Some draws are infeasible; they are kept: a status is part of the answer.
+
+Everything the project computes is computed again here from the README's model, in
+numpy: G and Jᵀ from the geometry, `Z = [G; Jᵀ]⁺` (rank tolerance 1e-9 σ_max), the
+consistency rows, the inscribed polyhedra (PCwF pyramids, SFCl bipyramids, the SFCe
+polyhedron at the paper's eq. 13 latitudes, K = 2) and the exact cones. cvxpy then
+solves each variant (`exact`, `N4`, `N8`, `N16`) with Clarabel: the exact cones at the
+reference cases' tolerances, 1e-10, twice, the second time with σ divided by the
+first answer's (Clarabel's absolute tolerances then count relative to σ*), the
+polyhedra at 1e-12. Each polyhedral variant is solved again by DAQP (a dual
+active-set QP solver, exact to rounding), whose answer is kept; a case is written only
+if the two agree on the status and, when optimal, on σ to 1e-10 relative (the largest
+difference is printed and written to the file), and if σ* ≤ σ(16) (the polyhedra are
+inside the cones) with the statuses to match. A draw that fails is drawn again.
+
+Run from the repository root (cvxpy 1.9 with Clarabel, daqp and numpy from PyPI):
+
+    python3 -m venv /tmp/cvx && /tmp/cvx/bin/pip install cvxpy daqp numpy
+    /tmp/cvx/bin/python scripts/oracle_cases.py 150 > tests/data/oracle-cases.json
+
+(`oracle_cases.py COUNT [SEED]`, seed 20261205 by default.) With `ORACLE_REJECTED=DIR`,
+each draw the oracles could not settle is written to DIR as a problem file with the
+reference conventions, for `grasp-torque compare`.
+
+The tests do not run this script.
+"""
+import json
+import math
+import os
+import sys
+
+import cvxpy as cp
+import numpy as np
+
+RANK_TOL = 1e-9
+AGREE = 1e-10
+K = 2
+FAMILIES = ["fpcmix", "pcwf", "sfcl", "sfce", "mixed"]
+# Clarabel's tolerances: on the QPs of the polyhedra it reaches 1e-12; on the exact cones
+# 1e-10, the reference cases' own (tighter, it often ends `optimal_inaccurate`).
+CLARABEL_QP = dict(tol_gap_abs=1e-12, tol_gap_rel=1e-12, tol_feas=1e-12, tol_ktratio=1e-10, max_iter=500)
+CLARABEL_SOCP = dict(tol_gap_abs=1e-10, tol_gap_rel=1e-10, tol_feas=1e-10, tol_ktratio=1e-8, max_iter=500)
+
+
+def unit(v):
+    return v / np.linalg.norm(v)
+
+
+def draw_contact(rng, family, i):
+    mu = float(np.round(rng.uniform(0.2, 1.0), 3))
+    mt = float(np.round(rng.uniform(0.003, 0.04), 4))
+    kind = {"fpcmix": ["pcwf", "fpc", "sfcl"][i % 3], "mixed": rng.choice(["pcwf", "sfcl", "sfce"])}.get(
+        family, family)
+    c = {"model": str(kind)}
+    if kind != "fpc":
+        c["mu"] = mu
+    if kind in ("sfcl", "sfce"):
+        c["mu_torsion"] = mt
+    return c
+
+
+def draw_case(rng, index):
+    family = FAMILIES[index % len(FAMILIES)]
+    fingers = int(rng.integers(2, 6))
+    contacts, joints_of = [], []
+    # Contacts spread around the sphere: evenly spaced azimuths, jittered.
+    phase = rng.uniform(0, 2 * math.pi)
+    for k in range(fingers):
+        az = phase + 2 * math.pi * k / fingers + rng.normal(0, 0.25)
+        el = rng.normal(0, 0.35)
+        p = 0.04 * np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+        # The normal into the object, tilted.
+        n = unit(-p / np.linalg.norm(p) + rng.normal(0, 0.15, 3))
+        c = draw_contact(rng, family, k)
+        c.update(finger=k, position=p.tolist(), normal=n.tolist())
+        contacts.append(c)
+        # A quarter of the fingers touch twice (a second link, nearer the palm).
+        if rng.random() < 0.25:
+            q = unit(p + rng.normal(0, 0.015, 3)) * 0.04
+            c = draw_contact(rng, family, k + 1)
+            c.update(finger=k, position=q.tolist(), normal=unit(-q + rng.normal(0, 0.006, 3)).tolist())
+            contacts.append(c)
+        # Joints from the palm side out to the contact.
+        count = int(rng.integers(2, 5))
+        out = unit(p)
+        joints = []
+        for j in range(count):
+            reach = 0.13 - 0.025 * j + rng.normal(0, 0.005)
+            o = out * reach + rng.normal(0, 0.012, 3)
+            joints.append({"origin": o.tolist(), "axis": unit(rng.normal(size=3)).tolist()})
+        joints_of.append({"joints": joints})
+    mass = rng.uniform(0.1, 1.0)
+    push = rng.normal(0, 0.25, 3) * 9.81 * mass
+    twist = rng.normal(0, 0.02, 3) * 9.81 * mass
+    wrench = np.concatenate([push + [0, 0, 9.81 * mass], twist])
+    return family, {"contacts": contacts, "fingers": joints_of, "wrench": wrench.tolist()}
+
+
+def directions(c):
+    """The contact frame's force directions of the model, and whether it has torsion."""
+    n = np.array(c["normal"])
+    a0 = np.array([0.0, 1.0, 0.0]) if abs(n[0]) >= 0.9 else np.array([1.0, 0.0, 0.0])
+    t1 = unit(np.cross(n, a0))
+    t2 = np.cross(n, t1)
+    if c["model"] == "fpc":
+        return [n], False
+    return [t1, t2, n], c["model"] in ("sfcl", "sfce")
+
+
+def matrices(geo):
+    """G and Jᵀ by the README's geometry convention."""
+    g_cols, jt_cols = [], []
+    joints = [(f, j) for f, finger in enumerate(geo["fingers"]) for j in finger["joints"]]
+    for c in geo["contacts"]:
+        p = np.array(c["position"])
+        dirs, torsion = directions(c)
+        for d in dirs:
+            g_cols.append(np.concatenate([d, np.cross(p, d)]))
+            jt_cols.append([d @ np.cross(np.array(j["axis"]), p - np.array(j["origin"])) if f == c["finger"] else 0.0
+                            for f, j in joints])
+        if torsion:
+            n = np.array(c["normal"])
+            g_cols.append(np.concatenate([np.zeros(3), n]))
+            jt_cols.append([n @ np.array(j["axis"]) if f == c["finger"] else 0.0 for f, j in joints])
+    return np.array(g_cols).T, np.array(jt_cols).T
+
+
+def cone_rows(c, sides):
+    """Rows S of the inscribed polyhedron, `S f ≥ 0` on the contact's components."""
+    model = c["model"]
+    if model == "fpc":
+        return [[1.0]]
+    mu = c["mu"]
+    cos = math.cos(math.pi / sides)
+    phis = [(2 * j + 1) * math.pi / sides for j in range(sides)]
+    if model == "pcwf":
+        rows = [[-math.cos(f), -math.sin(f), mu * cos] for f in phis]
+        return rows + [[0.0, 0.0, 1.0]]
+    mt = c["mu_torsion"]
+    if model == "sfcl":
+        rows = []
+        for sign in (1.0, -1.0):
+            rows += [[-math.cos(f) / (mu * cos), -math.sin(f) / (mu * cos), -sign / mt, 1.0] for f in phis]
+        return rows + [[0.0, 0.0, 0.0, 1.0]]
+    # SFCe: latitudes ψ_i = π i / (2K); vertex radius l_i and height h_i = l_i tan ψ_i,
+    # the pole (l, h) = (0, mt). A face between latitudes i and i + 1 around the bisector
+    # φ is α (x cos φ + y sin φ) + β m ≤ fz with α l cos(π/N) + β h = 1 at both.
+    lat = []
+    for i in range(K + 1):
+        psi = math.pi * i / (2 * K)
+        if i == K:
+            lat.append((0.0, mt))
+        else:
+            l = mu * mt / math.sqrt(mu ** 2 * math.tan(psi) ** 2 + mt ** 2)
+            lat.append((l, l * math.tan(psi)))
+    rows = []
+    for sign in (1.0, -1.0):
+        for i in range(K):
+            (l0, h0), (l1, h1) = lat[i], lat[i + 1]
+            a, b = np.linalg.solve([[l0 * cos, h0], [l1 * cos, h1]], [1.0, 1.0])
+            rows += [[-a * math.cos(f), -a * math.sin(f), -sign * b, 1.0] for f in phis]
+    return rows + [[0.0, 0.0, 0.0, 1.0]]
+
+
+def model(G, JT, w):
+    """f = Z1 w + Z2 τ with Z = A⁺, and the consistency rows `Cτ = e`."""
+    A = np.vstack([G, JT])
+    U, s, _ = np.linalg.svd(A)
+    rank = int(np.sum(s > RANK_TOL * s[0]))
+    Z = np.linalg.pinv(A, rcond=RANK_TOL)
+    Uperp = U[:, rank:]
+    return Z[:, :6], Z[:, 6:], Uperp[6:, :].T, -Uperp[:6, :].T @ w
+
+
+def solve(geo, G, JT, variant, solver, scale=1.0):
+    """One variant by `solver`, minimising σ / `scale` (Clarabel's absolute tolerances
+    then mean something relative to σ)."""
+    w = np.array(geo["wrench"])
+    m = JT.shape[0]
+    Z1, Z2, C, e = model(G, JT, w)
+    tau = cp.Variable(m)
+    f = Z1 @ w + Z2 @ tau
+    cons = []
+    if C.shape[0]:
+        cons.append(C @ tau == e)
+    col = 0
+    for c in geo["contacts"]:
+        dim = {"fpc": 1, "pcwf": 3}.get(c["model"], 4)
+        fc = f[col:col + dim]
+        col += dim
+        if variant == "exact":
+            if c["model"] == "fpc":
+                cons.append(fc[0] >= 0)
+            elif c["model"] == "pcwf":
+                cons.append(cp.SOC(c["mu"] * fc[2], fc[:2]))
+            elif c["model"] == "sfcl":
+                cons.append(cp.norm(fc[:2], 2) / c["mu"] + cp.abs(fc[3]) / c["mu_torsion"] <= fc[2])
+            else:
+                cons.append(cp.SOC(fc[2], cp.hstack([fc[0] / c["mu"], fc[1] / c["mu"], fc[3] / c["mu_torsion"]])))
+        else:
+            S = np.array(cone_rows(c, int(variant[1:])))
+            if c["model"] in ("sfcl", "sfce"):
+                # Rows are written on (fx, fy, mz, fz); the columns are (fx, fy, fz, mz).
+                S = S[:, [0, 1, 3, 2]]
+            cons.append(S @ fc >= 0)
+    prob = cp.Problem(cp.Minimize(cp.sum_squares(tau) / scale), cons)
+    try:
+        if solver == "CLARABEL":
+            prob.solve(solver="CLARABEL", **(CLARABEL_SOCP if variant == "exact" else CLARABEL_QP))
+        else:
+            prob.solve(solver=solver)
+    except cp.error.SolverError:
+        return {"status": "solver_error"}
+    if prob.status == "optimal":
+        t = np.array(tau.value)
+        return {"status": "optimal", "objective": float(t @ t), "torque": t.tolist()}
+    if prob.status == "infeasible":
+        return {"status": "infeasible", "objective": None, "torque": None}
+    return {"status": prob.status}
+
+
+def problem_of(geo, G, JT):
+    """The matrix form of a drawn grasp."""
+    return {"grasp_matrix": G.tolist(), "jacobian_transpose": JT.tolist(), "wrench": geo["wrench"],
+            "contacts": [{k: v for k, v in c.items() if k in ("model", "mu", "mu_torsion")}
+                         for c in geo["contacts"]]}
+
+
+def main():
+    count = int(sys.argv[1])
+    seed = int(sys.argv[2]) if len(sys.argv) > 2 else 20261205
+    rejected = os.environ.get("ORACLE_REJECTED")
+    rng = np.random.default_rng(seed)
+    cases, worst, drawn = [], 0.0, 0
+    while len(cases) < count:
+        drawn += 1
+        family, geo = draw_case(rng, len(cases))
+        G, JT = matrices(geo)
+        ref, ok = {}, True
+        for variant in ["N4", "N8", "N16", "exact"]:
+            r = solve(geo, G, JT, variant, "CLARABEL")
+            # The exact cones again on the scale of σ* (Clarabel's absolute tolerances are
+            # then relative to it).
+            if variant == "exact" and r["status"] == "optimal" and r["objective"] > 0:
+                r = solve(geo, G, JT, variant, "CLARABEL", r["objective"])
+            if r["status"] not in ("optimal", "infeasible"):
+                ok = False
+                break
+            if variant != "exact":
+                d = solve(geo, G, JT, variant, "DAQP")
+                if d["status"] != r["status"]:
+                    ok = False
+                    break
+                if r["status"] == "optimal":
+                    diff = abs(d["objective"] - r["objective"]) / max(abs(d["objective"]), 1e-300)
+                    if diff > AGREE:
+                        ok = False
+                        break
+                    worst = max(worst, diff)
+                r = d
+            ref[variant] = r
+        # The polyhedra are inside the cones: σ* ≤ σ(16), and infeasible only with them.
+        if ok:
+            e, p = ref["exact"], ref["N16"]
+            if p["status"] == "optimal":
+                ok = e["status"] == "optimal" and e["objective"] <= p["objective"] * (1 + 1e-9)
+            elif e["status"] == "infeasible":
+                ok = all(ref[v]["status"] == "infeasible" for v in ("N4", "N8", "N16"))
+        if not ok:
+            print(f"draw {drawn}: the oracles disagree or did not finish; drawn again", file=sys.stderr)
+            if rejected:
+                with open(os.path.join(rejected, f"draw-{drawn}.json"), "w") as out:
+                    json.dump(dict(problem_of(geo, G, JT), internal_forces="euclidean",
+                                   linearization={"sfce_spacing": "paper"}), out)
+            continue
+        name = f"h{len(geo['contacts'])}x{sum(len(f['joints']) for f in geo['fingers'])}-{family}-{len(cases)}"
+        problem = problem_of(geo, G, JT)
+        ref = {v: ref[v] for v in ("exact", "N4", "N8", "N16")}
+        cases.append({"name": name, "problem": problem, "geometry": geo, "reference": ref})
+    statuses = {}
+    for c in cases:
+        s = c["reference"]["exact"]["status"]
+        statuses[s] = statuses.get(s, 0) + 1
+    print(f"{len(cases)} cases ({drawn} drawn), exact statuses {statuses}; "
+          f"largest Clarabel–DAQP difference of σ {worst:.1e}", file=sys.stderr)
+    json.dump({"oracle": {"generator": "scripts/oracle_cases.py", "seed": seed, "cvxpy": cp.__version__,
+                          "clarabel_qp": CLARABEL_QP, "clarabel_socp": CLARABEL_SOCP, "daqp_agreement": worst},
+               "cases": cases}, sys.stdout)
+
+
+if __name__ == "__main__":
+    main()
