@@ -5,23 +5,29 @@ optima from cvxpy: the oracle of `cargo test --test oracle_cases`.
 Each case is drawn at random as the reference cases were (`shared/reference/README.md`,
 "Geometry convention"): 2 to 5 fingers of 2 to 4 revolute joints, one contact per
 finger (two on a quarter of them) on a sphere of radius 4 cm (normals into the object,
-tilted by about 0.15 rad), one
-contact model per case (FPC mixes, PCwF, SFCl, SFCe or mixed), friction drawn per
-contact, and a wrench that holds 0.1 to 1 kg against gravity with a random push and
-twist. Some draws are infeasible; they are kept: a status is part of the answer.
+tilted by about 0.15 rad), one contact-model family per case (FPC mixes, PCwF, SFCl,
+SFCe or mixed), friction drawn per contact, and a wrench that holds 0.1 to 1 kg
+against gravity with a random push and twist. Some draws are infeasible; they are
+kept: a status is part of the answer.
 
-Everything the project computes is computed again here from the README's model, in
-numpy: G and Jᵀ from the geometry, `Z = [G; Jᵀ]⁺` (rank tolerance 1e-9 σ_max), the
-consistency rows, the inscribed polyhedra (PCwF pyramids, SFCl bipyramids, the SFCe
-polyhedron at the paper's eq. 13 latitudes, K = 2) and the exact cones. cvxpy then
-solves each variant (`exact`, `N4`, `N8`, `N16`) with Clarabel: the exact cones at the
-reference cases' tolerances, 1e-10, twice, the second time with σ divided by the
-first answer's (Clarabel's absolute tolerances then count relative to σ*), the
-polyhedra at 1e-12. Each polyhedral variant is solved again by DAQP (a dual
-active-set QP solver, exact to rounding), whose answer is kept; a case is written only
-if the two agree on the status and, when optimal, on σ to 1e-10 relative (the largest
-difference is printed and written to the file), and if σ* ≤ σ(16) (the polyhedra are
-inside the cones) with the statuses to match. A draw that fails is drawn again.
+Everything the project computes is computed again here, in numpy, from the reference
+README's model and from this project's documented defaults: G and Jᵀ from the
+geometry; the contact forces `f = Z1 w + Z2 τ` and the consistency rows, with
+`Z = [G; Jᵀ]⁺` (rank tolerance 1e-9 σ_max) under the reference set's conventions
+(`reference`), and with the force of least compliance `‖D f‖` (D = 1 on forces,
+1/mu_torsion on mz; the rows of `A D⁻¹` equilibrated before the rank decision)
+under the project's defaults (`defaults`); the inscribed polyhedra (PCwF pyramids,
+SFCl bipyramids, the SFCe polyhedron with K = 2 latitudes at the paper's eq. 13
+angles, or uniform in the normalised ellipse angle for `defaults`) and the exact
+cones. cvxpy then solves each variant (`exact`, `N4`, `N8`, `N16`) under each set of
+conventions with Clarabel: the exact cones at the reference cases' tolerances, 1e-10,
+twice, the second time with σ divided by the first answer's (Clarabel's absolute
+tolerances then count relative to σ*), the polyhedra at 1e-12. Each polyhedral
+variant is solved again by DAQP (a dual active-set QP solver, exact to rounding),
+whose answer is kept; a case is written only if the two agree on the status and,
+when optimal, on σ to 1e-10 relative (the largest difference is printed and written
+to the file), and if σ* ≤ σ(16) (the polyhedra are inside the cones) with the
+statuses to match. A draw that fails is drawn again.
 
 Run from the repository root (cvxpy 1.9 with Clarabel, daqp and numpy from PyPI):
 
@@ -29,8 +35,8 @@ Run from the repository root (cvxpy 1.9 with Clarabel, daqp and numpy from PyPI)
     /tmp/cvx/bin/python scripts/oracle_cases.py 150 > tests/data/oracle-cases.json
 
 (`oracle_cases.py COUNT [SEED]`, seed 20261205 by default.) With `ORACLE_REJECTED=DIR`,
-each draw the oracles could not settle is written to DIR as a problem file with the
-reference conventions, for `grasp-torque compare`.
+each draw the oracles could not settle is written to DIR as two problem files, one per
+set of conventions, for `grasp-torque compare`.
 
 The tests do not run this script.
 """
@@ -45,6 +51,10 @@ import numpy as np
 RANK_TOL = 1e-9
 AGREE = 1e-10
 K = 2
+# Each case is solved twice: `reference` under the reference set's conventions (the
+# Euclidean A⁺, the paper's SFCe latitudes), `defaults` under this project's defaults
+# (least-compliance internal forces, uniform latitudes).
+CONVENTIONS = {"reference": ("euclidean", "paper"), "defaults": ("compliance", "uniform")}
 FAMILIES = ["fpcmix", "pcwf", "sfcl", "sfce", "mixed"]
 # Clarabel's tolerances: on the QPs of the polyhedra it reaches 1e-12; on the exact cones
 # 1e-10, the reference cases' own (tighter, it often ends `optimal_inaccurate`).
@@ -135,8 +145,9 @@ def matrices(geo):
     return np.array(g_cols).T, np.array(jt_cols).T
 
 
-def cone_rows(c, sides):
-    """Rows S of the inscribed polyhedron, `S f ≥ 0` on the contact's components."""
+def cone_rows(c, sides, spacing):
+    """Rows S of the inscribed polyhedron, `S f ≥ 0` on the contact's components, with
+    the SFCe latitudes at `spacing` ("paper" or "uniform")."""
     model = c["model"]
     if model == "fpc":
         return [[1.0]]
@@ -152,14 +163,18 @@ def cone_rows(c, sides):
         for sign in (1.0, -1.0):
             rows += [[-math.cos(f) / (mu * cos), -math.sin(f) / (mu * cos), -sign / mt, 1.0] for f in phis]
         return rows + [[0.0, 0.0, 0.0, 1.0]]
-    # SFCe: latitudes ψ_i = π i / (2K); vertex radius l_i and height h_i = l_i tan ψ_i,
-    # the pole (l, h) = (0, mt). A face between latitudes i and i + 1 around the bisector
-    # φ is α (x cos φ + y sin φ) + β m ≤ fz with α l cos(π/N) + β h = 1 at both.
+    # SFCe: latitudes at angles ψ_i = π i / (2K), each a vertex radius l_i and height
+    # h_i: "paper" (eq. 13) puts them on the ellipse at polar angle ψ_i, h_i = l_i tan ψ_i;
+    # "uniform" at the normalised ellipse angle, (l, h) = (mu cos ψ_i, mt sin ψ_i). The
+    # pole is (0, mt). A face between latitudes i and i + 1 around the bisector φ is
+    # α (x cos φ + y sin φ) + β m ≤ fz with α l cos(π/N) + β h = 1 at both.
     lat = []
     for i in range(K + 1):
         psi = math.pi * i / (2 * K)
         if i == K:
             lat.append((0.0, mt))
+        elif spacing == "uniform":
+            lat.append((mu * math.cos(psi), mt * math.sin(psi)))
         else:
             l = mu * mt / math.sqrt(mu ** 2 * math.tan(psi) ** 2 + mt ** 2)
             lat.append((l, l * math.tan(psi)))
@@ -172,22 +187,38 @@ def cone_rows(c, sides):
     return rows + [[0.0, 0.0, 0.0, 1.0]]
 
 
-def model(G, JT, w):
-    """f = Z1 w + Z2 τ with Z = A⁺, and the consistency rows `Cτ = e`."""
+def model(G, JT, w, contacts, internal):
+    """f = Z1 w + Z2 τ and the consistency rows `Cτ = e`. "euclidean": Z = A⁺ (eq. 31).
+    "compliance": the f of least ‖D f‖, D = 1 on forces and 1/mu_torsion on mz, with
+    the rows of A D⁻¹ equilibrated before the rank decision: Z = D⁻¹ (R A D⁻¹)⁺ R."""
     A = np.vstack([G, JT])
-    U, s, _ = np.linalg.svd(A)
+    d = np.ones(A.shape[1])
+    R = np.ones(A.shape[0])
+    if internal == "compliance":
+        col = 0
+        for c in contacts:
+            dim = {"fpc": 1, "pcwf": 3}.get(c["model"], 4)
+            if dim == 4:
+                d[col + 3] = 1.0 / c["mu_torsion"]
+            col += dim
+        norms = np.linalg.norm(A / d, axis=1)
+        R = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
+    B = R[:, None] * A / d
+    U, s, _ = np.linalg.svd(B)
     rank = int(np.sum(s > RANK_TOL * s[0]))
-    Z = np.linalg.pinv(A, rcond=RANK_TOL)
-    Uperp = U[:, rank:]
-    return Z[:, :6], Z[:, 6:], Uperp[6:, :].T, -Uperp[:6, :].T @ w
+    Z = (np.linalg.pinv(B, rcond=RANK_TOL) * R) / d[:, None]
+    Uperp = U[:, rank:].T * R
+    return Z[:, :6], Z[:, 6:], Uperp[:, 6:], -Uperp[:, :6] @ w
 
 
-def solve(geo, G, JT, variant, solver, scale=1.0):
-    """One variant by `solver`, minimising σ / `scale` (Clarabel's absolute tolerances
-    then mean something relative to σ)."""
+def solve(geo, G, JT, variant, solver, conventions, scale=1.0):
+    """One variant by `solver` under `conventions` (internal forces, SFCe spacing),
+    minimising σ / `scale` (Clarabel's absolute tolerances then mean something relative
+    to σ)."""
+    internal, spacing = conventions
     w = np.array(geo["wrench"])
     m = JT.shape[0]
-    Z1, Z2, C, e = model(G, JT, w)
+    Z1, Z2, C, e = model(G, JT, w, geo["contacts"], internal)
     tau = cp.Variable(m)
     f = Z1 @ w + Z2 @ tau
     cons = []
@@ -208,7 +239,7 @@ def solve(geo, G, JT, variant, solver, scale=1.0):
             else:
                 cons.append(cp.SOC(fc[2], cp.hstack([fc[0] / c["mu"], fc[1] / c["mu"], fc[3] / c["mu_torsion"]])))
         else:
-            S = np.array(cone_rows(c, int(variant[1:])))
+            S = np.array(cone_rows(c, int(variant[1:]), spacing))
             if c["model"] in ("sfcl", "sfce"):
                 # Rows are written on (fx, fy, mz, fz); the columns are (fx, fy, fz, mz).
                 S = S[:, [0, 1, 3, 2]]
@@ -229,6 +260,38 @@ def solve(geo, G, JT, variant, solver, scale=1.0):
     return {"status": prob.status}
 
 
+def oracle(geo, G, JT, conventions):
+    """Every variant under `conventions`, and the largest Clarabel–DAQP difference of σ;
+    None where the oracles disagree or did not finish."""
+    ref, worst = {}, 0.0
+    for variant in ["N4", "N8", "N16", "exact"]:
+        r = solve(geo, G, JT, variant, "CLARABEL", conventions)
+        # The exact cones again on the scale of σ* (Clarabel's absolute tolerances are
+        # then relative to it).
+        if variant == "exact" and r["status"] == "optimal" and r["objective"] > 0:
+            r = solve(geo, G, JT, variant, "CLARABEL", conventions, r["objective"])
+        if r["status"] not in ("optimal", "infeasible"):
+            return None, worst
+        if variant != "exact":
+            d = solve(geo, G, JT, variant, "DAQP", conventions)
+            if d["status"] != r["status"]:
+                return None, worst
+            if r["status"] == "optimal":
+                diff = abs(d["objective"] - r["objective"]) / max(abs(d["objective"]), 1e-300)
+                if diff > AGREE:
+                    return None, worst
+                worst = max(worst, diff)
+            r = d
+        ref[variant] = r
+    # The polyhedra are inside the cones: σ* ≤ σ(16), and infeasible only with them.
+    e, p = ref["exact"], ref["N16"]
+    if p["status"] == "optimal" and not (e["status"] == "optimal" and e["objective"] <= p["objective"] * (1 + 1e-9)):
+        return None, worst
+    if e["status"] == "infeasible" and any(ref[v]["status"] != "infeasible" for v in ("N4", "N8", "N16")):
+        return None, worst
+    return {v: ref[v] for v in ("exact", "N4", "N8", "N16")}, worst
+
+
 def problem_of(geo, G, JT):
     """The matrix form of a drawn grasp."""
     return {"grasp_matrix": G.tolist(), "jacobian_transpose": JT.tolist(), "wrench": geo["wrench"],
@@ -246,47 +309,23 @@ def main():
         drawn += 1
         family, geo = draw_case(rng, len(cases))
         G, JT = matrices(geo)
-        ref, ok = {}, True
-        for variant in ["N4", "N8", "N16", "exact"]:
-            r = solve(geo, G, JT, variant, "CLARABEL")
-            # The exact cones again on the scale of σ* (Clarabel's absolute tolerances are
-            # then relative to it).
-            if variant == "exact" and r["status"] == "optimal" and r["objective"] > 0:
-                r = solve(geo, G, JT, variant, "CLARABEL", r["objective"])
-            if r["status"] not in ("optimal", "infeasible"):
-                ok = False
-                break
-            if variant != "exact":
-                d = solve(geo, G, JT, variant, "DAQP")
-                if d["status"] != r["status"]:
-                    ok = False
-                    break
-                if r["status"] == "optimal":
-                    diff = abs(d["objective"] - r["objective"]) / max(abs(d["objective"]), 1e-300)
-                    if diff > AGREE:
-                        ok = False
-                        break
-                    worst = max(worst, diff)
-                r = d
-            ref[variant] = r
-        # The polyhedra are inside the cones: σ* ≤ σ(16), and infeasible only with them.
+        settled = [oracle(geo, G, JT, conventions) for conventions in CONVENTIONS.values()]
+        ok = all(r is not None for r, _ in settled)
         if ok:
-            e, p = ref["exact"], ref["N16"]
-            if p["status"] == "optimal":
-                ok = e["status"] == "optimal" and e["objective"] <= p["objective"] * (1 + 1e-9)
-            elif e["status"] == "infeasible":
-                ok = all(ref[v]["status"] == "infeasible" for v in ("N4", "N8", "N16"))
+            worst = max([worst] + [w for _, w in settled])
         if not ok:
             print(f"draw {drawn}: the oracles disagree or did not finish; drawn again", file=sys.stderr)
             if rejected:
-                with open(os.path.join(rejected, f"draw-{drawn}.json"), "w") as out:
-                    json.dump(dict(problem_of(geo, G, JT), internal_forces="euclidean",
-                                   linearization={"sfce_spacing": "paper"}), out)
+                for key, (internal, spacing) in CONVENTIONS.items():
+                    with open(os.path.join(rejected, f"draw-{drawn}-{key}.json"), "w") as out:
+                        json.dump(dict(problem_of(geo, G, JT), internal_forces=internal,
+                                       linearization={"sfce_spacing": spacing}), out)
             continue
         name = f"h{len(geo['contacts'])}x{sum(len(f['joints']) for f in geo['fingers'])}-{family}-{len(cases)}"
         problem = problem_of(geo, G, JT)
-        ref = {v: ref[v] for v in ("exact", "N4", "N8", "N16")}
-        cases.append({"name": name, "problem": problem, "geometry": geo, "reference": ref})
+        case = {"name": name, "problem": problem, "geometry": geo}
+        case.update({key: r for key, (r, _) in zip(CONVENTIONS, settled)})
+        cases.append(case)
     statuses = {}
     for c in cases:
         s = c["reference"]["exact"]["status"]

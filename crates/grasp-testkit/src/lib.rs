@@ -262,16 +262,26 @@ pub fn as_reference(mut p: grasp_core::GraspProblem) -> grasp_core::GraspProblem
 
 /// A reference case's matrix-form problem, with the reference conventions.
 pub fn reference_problem(problem: &serde_json::Value) -> grasp_core::GraspProblem {
-    let file: grasp_io::MatrixFile =
-        serde_json::from_value(problem.clone()).expect("a matrix-form problem");
-    as_reference(file.into_problem().expect("a valid problem"))
+    as_reference(matrix_problem(problem))
 }
 
 /// A reference case's geometry-form problem, with the reference conventions.
 pub fn reference_geometry(geometry: &serde_json::Value) -> grasp_core::GraspProblem {
+    as_reference(geometry_problem(geometry))
+}
+
+/// A case's matrix-form problem, with this project's defaults.
+pub fn matrix_problem(problem: &serde_json::Value) -> grasp_core::GraspProblem {
+    let file: grasp_io::MatrixFile =
+        serde_json::from_value(problem.clone()).expect("a matrix-form problem");
+    file.into_problem().expect("a valid problem")
+}
+
+/// A case's geometry-form problem, with this project's defaults.
+pub fn geometry_problem(geometry: &serde_json::Value) -> grasp_core::GraspProblem {
     let geo: grasp_io::GeometryFile =
         serde_json::from_value(geometry.clone()).expect("a geometry-form problem");
-    as_reference(geo.into_problem().expect("a valid problem"))
+    geo.into_problem().expect("a valid problem")
 }
 
 /// The same problem with lengths multiplied by `l` (m → mm: 1000) and forces by `f`

@@ -2,9 +2,12 @@
 //! project did not compute (`tests/data/oracle-cases.json`, from
 //! `scripts/oracle_cases.py`): G and Jᵀ built from the geometry in numpy, the model,
 //! polyhedra and cones written again from the reference README, the exact cones solved
-//! by cvxpy with Clarabel, the polyhedra by DAQP and checked by Clarabel. Every case
-//! is solved from its matrices and from its geometry (the project's own G and Jᵀ), on
-//! the exact cones and at N = 4, 8 and 16, and must end with the oracle's status and σ.
+//! by cvxpy with Clarabel, the polyhedra by DAQP and checked by Clarabel, under the
+//! reference set's conventions and under this project's defaults (least-compliance
+//! internal forces, uniform SFCe latitudes). Every case is solved from its matrices
+//! and from its geometry (the project's own G and Jᵀ), under both, on the exact cones
+//! and at N = 4, 8 and 16, and must end with the oracle's status and σ.
+//! `GRASP_ORACLE_CASES=FILE` runs it on another draw of the script.
 #![cfg(feature = "active-set")]
 
 use grasp_torque::{Backend, Cones, GraspProblem, Status};
@@ -35,54 +38,62 @@ fn unseen_grasps_end_with_the_oracles_status_and_optimum() {
     let (mut worst, mut infeasible) = ([0.0f64; 4], 0);
     for case in &cases {
         let name = case["name"].as_str().unwrap();
-        let forms: [(&str, GraspProblem); 2] = [
-            ("matrix", grasp_testkit::reference_problem(&case["problem"])),
+        // Under the reference set's conventions and under this project's defaults
+        // (least-compliance internal forces, uniform SFCe latitudes).
+        let forms: [(&str, &str, GraspProblem); 4] = [
             (
+                "reference",
+                "matrix",
+                grasp_testkit::reference_problem(&case["problem"]),
+            ),
+            (
+                "reference",
                 "geometry",
                 grasp_testkit::reference_geometry(&case["geometry"]),
             ),
+            (
+                "defaults",
+                "matrix",
+                grasp_testkit::matrix_problem(&case["problem"]),
+            ),
+            (
+                "defaults",
+                "geometry",
+                grasp_testkit::geometry_problem(&case["geometry"]),
+            ),
         ];
-        for (form, p) in &forms {
+        for (conventions, form, p) in &forms {
             for (k, &(variant, cones, sides, tol)) in TOLERANCE.iter().enumerate() {
                 let mut p = p.clone();
                 p.linearization.sides = sides;
                 let s = run(&p, Backend::ActiveSet, cones);
-                let want = &case["reference"][variant];
+                let want = &case[conventions][variant];
+                let at = format!("{name} {conventions} {form} {variant}");
                 match want["status"].as_str().unwrap() {
                     "optimal" => {
-                        assert_eq!(
-                            s.status,
-                            Status::Optimal,
-                            "{name} {form} {variant}: {:?}",
-                            s.reason
-                        );
+                        assert_eq!(s.status, Status::Optimal, "{at}: {:?}", s.reason);
                         let r = rel(s.objective, want["objective"].as_f64().unwrap());
                         assert!(
                             r <= tol,
-                            "{name} {form} {variant}: σ {} against the oracle's {} ({r:.1e})",
+                            "{at}: σ {} against the oracle's {} ({r:.1e})",
                             s.objective,
                             want["objective"]
                         );
                         worst[k] = worst[k].max(r);
                     }
                     "infeasible" => {
-                        assert_eq!(
-                            s.status,
-                            Status::Infeasible,
-                            "{name} {form} {variant}: σ {}",
-                            s.objective
-                        );
+                        assert_eq!(s.status, Status::Infeasible, "{at}: σ {}", s.objective);
                         infeasible += 1;
                     }
-                    other => panic!("{name} {variant}: an oracle status {other}"),
+                    other => panic!("{at}: an oracle status {other}"),
                 }
             }
         }
     }
     assert!(!cases.is_empty());
     eprintln!(
-        "{} cases, two forms each; {infeasible} infeasible answers; largest σ difference \
-         exact {:.1e}, N = 4 {:.1e}, 8 {:.1e}, 16 {:.1e}",
+        "{} cases, two conventions and two forms each; {infeasible} infeasible answers; \
+         largest σ difference exact {:.1e}, N = 4 {:.1e}, 8 {:.1e}, 16 {:.1e}",
         cases.len(),
         worst[0],
         worst[1],
