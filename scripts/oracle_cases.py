@@ -19,8 +19,10 @@ geometry; the contact forces `f = Z1 w + Z2 τ` and the consistency rows, with
 under the project's defaults (`defaults`); the inscribed polyhedra (PCwF pyramids,
 SFCl bipyramids, the SFCe polyhedron with K = 2 latitudes at the paper's eq. 13
 angles, or uniform in the normalised ellipse angle for `defaults`) and the exact
-cones. cvxpy then solves each variant (`exact`, `N4`, `N8`, `N16`) under each set of
-conventions with Clarabel: the exact cones at the reference cases' tolerances, 1e-10,
+cones. Each case is also solved under the defaults with problem fields drawn for it
+(`extras`: torque weights, torque limits and minimum normal forces; `extras_reference`
+holds those answers). cvxpy then solves each variant (`exact`, `N4`, `N8`, `N16`) in
+each setting with Clarabel: the exact cones at the reference cases' tolerances, 1e-10,
 twice, the second time with σ divided by the first answer's (Clarabel's absolute
 tolerances then count relative to σ*), the polyhedra at 1e-12. Each polyhedral
 variant is solved again by DAQP (a dual active-set QP solver, exact to rounding),
@@ -35,8 +37,8 @@ Run from the repository root (cvxpy 1.9 with Clarabel, daqp and numpy from PyPI)
     /tmp/cvx/bin/python scripts/oracle_cases.py 150 > tests/data/oracle-cases.json
 
 (`oracle_cases.py COUNT [SEED]`, seed 20261205 by default.) With `ORACLE_REJECTED=DIR`,
-each draw the oracles could not settle is written to DIR as two problem files, one per
-set of conventions, for `grasp-torque compare`.
+each draw the oracles could not settle is written to DIR as problem files, one per
+setting, for `grasp-torque compare`.
 
 The tests do not run this script.
 """
@@ -211,11 +213,13 @@ def model(G, JT, w, contacts, internal):
     return Z[:, :6], Z[:, 6:], Uperp[:, 6:], -Uperp[:, :6] @ w
 
 
-def solve(geo, G, JT, variant, solver, conventions, scale=1.0):
-    """One variant by `solver` under `conventions` (internal forces, SFCe spacing),
+def solve(geo, G, JT, variant, solver, conventions, scale=1.0, extras=None):
+    """One variant by `solver` under `conventions` (internal forces, SFCe spacing) and
+    the problem fields in `extras` (torque weights, limits, minimum normal forces),
     minimising σ / `scale` (Clarabel's absolute tolerances then mean something relative
     to σ)."""
     internal, spacing = conventions
+    extras = extras or {}
     w = np.array(geo["wrench"])
     m = JT.shape[0]
     Z1, Z2, C, e = model(G, JT, w, geo["contacts"], internal)
@@ -224,11 +228,21 @@ def solve(geo, G, JT, variant, solver, conventions, scale=1.0):
     cons = []
     if C.shape[0]:
         cons.append(C @ tau == e)
+    for j, limit in enumerate(extras.get("torque_limits", [None] * m)):
+        lower, upper = (-limit, limit) if isinstance(limit, float) else (limit or [None, None])
+        if lower is not None:
+            cons.append(tau[j] >= lower)
+        if upper is not None:
+            cons.append(tau[j] <= upper)
+    fmin = extras.get("min_normal_force", 0.0)
     col = 0
-    for c in geo["contacts"]:
+    for i, c in enumerate(geo["contacts"]):
         dim = {"fpc": 1, "pcwf": 3}.get(c["model"], 4)
         fc = f[col:col + dim]
         col += dim
+        least = fmin[i] if isinstance(fmin, list) else fmin
+        if least > 0:
+            cons.append(fc[0 if dim == 1 else 2] >= least)
         if variant == "exact":
             if c["model"] == "fpc":
                 cons.append(fc[0] >= 0)
@@ -244,7 +258,8 @@ def solve(geo, G, JT, variant, solver, conventions, scale=1.0):
                 # Rows are written on (fx, fy, mz, fz); the columns are (fx, fy, fz, mz).
                 S = S[:, [0, 1, 3, 2]]
             cons.append(S @ fc >= 0)
-    prob = cp.Problem(cp.Minimize(cp.sum_squares(tau) / scale), cons)
+    weights = np.array(extras.get("torque_weights", np.ones(m)))
+    prob = cp.Problem(cp.Minimize(cp.sum_squares(cp.multiply(np.sqrt(weights), tau)) / scale), cons)
     try:
         if solver == "CLARABEL":
             prob.solve(solver="CLARABEL", **(CLARABEL_SOCP if variant == "exact" else CLARABEL_QP))
@@ -254,26 +269,59 @@ def solve(geo, G, JT, variant, solver, conventions, scale=1.0):
         return {"status": "solver_error"}
     if prob.status == "optimal":
         t = np.array(tau.value)
-        return {"status": "optimal", "objective": float(t @ t), "torque": t.tolist()}
+        return {"status": "optimal", "objective": float(weights @ (t * t)), "torque": t.tolist()}
     if prob.status == "infeasible":
         return {"status": "infeasible", "objective": None, "torque": None}
     return {"status": prob.status}
 
 
-def oracle(geo, G, JT, conventions):
-    """Every variant under `conventions`, and the largest Clarabel–DAQP difference of σ;
-    None where the oracles disagree or did not finish."""
+def draw_extras(rng, geo, m, tau):
+    """Problem fields for the project's defaults to be solved with: torque weights (on
+    seven draws in ten), minimum normal forces (one number, or one per contact; on
+    half), and torque limits from a third to one and a half times the largest torque
+    without them, symmetric, one-sided or two-sided, some joints unlimited (on six in
+    ten grasps that have that torque)."""
+    extras = {}
+    if rng.random() < 0.7:
+        extras["torque_weights"] = np.round(rng.uniform(0.2, 5.0, m), 3).tolist()
+    if rng.random() < 0.5:
+        if rng.random() < 0.5:
+            extras["min_normal_force"] = float(np.round(rng.uniform(0.05, 0.5), 3))
+        else:
+            extras["min_normal_force"] = np.round(rng.uniform(0.0, 0.5, len(geo["contacts"])), 3).tolist()
+    if tau is not None and rng.random() < 0.6:
+        top = max(abs(t) for t in tau)
+        limits = []
+        for _ in range(m):
+            r, a, b = rng.random(), float(top * rng.uniform(0.33, 1.5)), float(top * rng.uniform(0.33, 1.5))
+            if r < 0.3:
+                limits.append(None)
+            elif r < 0.65:
+                limits.append(a)
+            elif r < 0.85:
+                limits.append([-a, b])
+            elif r < 0.925:
+                limits.append([-a, None])
+            else:
+                limits.append([None, b])
+        extras["torque_limits"] = limits
+    return extras
+
+
+def oracle(geo, G, JT, conventions, extras=None):
+    """Every variant under `conventions` and `extras`, and the largest Clarabel–DAQP
+    difference of σ; None where the oracles disagree or did not finish."""
     ref, worst = {}, 0.0
     for variant in ["N4", "N8", "N16", "exact"]:
-        r = solve(geo, G, JT, variant, "CLARABEL", conventions)
+        r = solve(geo, G, JT, variant, "CLARABEL", conventions, extras=extras)
         # The exact cones again on the scale of σ* (Clarabel's absolute tolerances are
         # then relative to it).
         if variant == "exact" and r["status"] == "optimal" and r["objective"] > 0:
-            r = solve(geo, G, JT, variant, "CLARABEL", conventions, r["objective"])
+            r = solve(geo, G, JT, variant, "CLARABEL", conventions, r["objective"], extras)
         if r["status"] not in ("optimal", "infeasible"):
             return None, worst
         if variant != "exact":
-            d = solve(geo, G, JT, variant, "DAQP", conventions)
+            d = solve(geo, G, JT, variant, "DAQP", conventions, extras=extras)
             if d["status"] != r["status"]:
                 return None, worst
             if r["status"] == "optimal":
@@ -311,20 +359,29 @@ def main():
         G, JT = matrices(geo)
         settled = [oracle(geo, G, JT, conventions) for conventions in CONVENTIONS.values()]
         ok = all(r is not None for r, _ in settled)
+        extras = None
+        if ok:
+            extras = draw_extras(rng, geo, JT.shape[0], settled[-1][0]["exact"].get("torque"))
+            settled.append(oracle(geo, G, JT, CONVENTIONS["defaults"], extras))
+            ok = settled[-1][0] is not None
         if ok:
             worst = max([worst] + [w for _, w in settled])
         if not ok:
             print(f"draw {drawn}: the oracles disagree or did not finish; drawn again", file=sys.stderr)
             if rejected:
-                for key, (internal, spacing) in CONVENTIONS.items():
+                settings = [(key, conventions, {}) for key, conventions in CONVENTIONS.items()]
+                if extras is not None:
+                    settings.append(("extras", CONVENTIONS["defaults"], extras))
+                for key, (internal, spacing), fields in settings:
                     with open(os.path.join(rejected, f"draw-{drawn}-{key}.json"), "w") as out:
                         json.dump(dict(problem_of(geo, G, JT), internal_forces=internal,
-                                       linearization={"sfce_spacing": spacing}), out)
+                                       linearization={"sfce_spacing": spacing}, **fields), out)
             continue
         name = f"h{len(geo['contacts'])}x{sum(len(f['joints']) for f in geo['fingers'])}-{family}-{len(cases)}"
         problem = problem_of(geo, G, JT)
         case = {"name": name, "problem": problem, "geometry": geo}
-        case.update({key: r for key, (r, _) in zip(CONVENTIONS, settled)})
+        case.update({key: r for key, (r, _) in zip(list(CONVENTIONS) + ["extras_reference"], settled)})
+        case["extras"] = extras
         cases.append(case)
     statuses = {}
     for c in cases:

@@ -3,17 +3,29 @@
 //! `scripts/oracle_cases.py`): G and Jᵀ built from the geometry in numpy, the model,
 //! polyhedra and cones written again from the reference README, the exact cones solved
 //! by cvxpy with Clarabel, the polyhedra by DAQP and checked by Clarabel, under the
-//! reference set's conventions and under this project's defaults (least-compliance
-//! internal forces, uniform SFCe latitudes). Every case is solved from its matrices
-//! and from its geometry (the project's own G and Jᵀ), under both, on the exact cones
-//! and at N = 4, 8 and 16, and must end with the oracle's status and σ.
+//! reference set's conventions, under this project's defaults (least-compliance
+//! internal forces, uniform SFCe latitudes), and under the defaults with torque
+//! weights, torque limits and minimum normal forces drawn per case. Every case is
+//! solved from its matrices and from its geometry (the project's own G and Jᵀ), in
+//! each setting, on the exact cones and at N = 4, 8 and 16, and must end with the
+//! oracle's status and σ.
 //! `GRASP_ORACLE_CASES=FILE` runs it on another draw of the script.
 #![cfg(feature = "active-set")]
 
+use grasp_testkit as testkit;
 use grasp_torque::{Backend, Cones, GraspProblem, Status};
 
 mod common;
 use common::run;
+
+/// `file` with the fields of `extra` added.
+fn with_fields(file: &serde_json::Value, extra: &serde_json::Value) -> serde_json::Value {
+    let mut file = file.clone();
+    if let (Some(f), Some(e)) = (file.as_object_mut(), extra.as_object()) {
+        f.extend(e.iter().map(|(k, v)| (k.clone(), v.clone())));
+    }
+    file
+}
 
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
@@ -34,32 +46,36 @@ const TOLERANCE: [(&str, Cones, usize, f64); 4] = [
 
 #[test]
 fn unseen_grasps_end_with_the_oracles_status_and_optimum() {
-    let cases = grasp_testkit::oracle_cases();
+    let cases = testkit::oracle_cases();
     let (mut worst, mut infeasible) = ([0.0f64; 4], 0);
     for case in &cases {
         let name = case["name"].as_str().unwrap();
-        // Under the reference set's conventions and under this project's defaults
-        // (least-compliance internal forces, uniform SFCe latitudes).
-        let forms: [(&str, &str, GraspProblem); 4] = [
-            (
-                "reference",
-                "matrix",
-                grasp_testkit::reference_problem(&case["problem"]),
-            ),
+        // Under the reference set's conventions, under this project's defaults, and
+        // under the defaults with the case's torque weights, limits and minimum normal
+        // forces (`extras`).
+        let (problem, geometry) = (&case["problem"], &case["geometry"]);
+        let (problem_x, geometry_x) = (
+            with_fields(problem, &case["extras"]),
+            with_fields(geometry, &case["extras"]),
+        );
+        let forms: [(&str, &str, GraspProblem); 6] = [
+            ("reference", "matrix", testkit::reference_problem(problem)),
             (
                 "reference",
                 "geometry",
-                grasp_testkit::reference_geometry(&case["geometry"]),
+                testkit::reference_geometry(geometry),
             ),
+            ("defaults", "matrix", testkit::matrix_problem(problem)),
+            ("defaults", "geometry", testkit::geometry_problem(geometry)),
             (
-                "defaults",
+                "extras_reference",
                 "matrix",
-                grasp_testkit::matrix_problem(&case["problem"]),
+                testkit::matrix_problem(&problem_x),
             ),
             (
-                "defaults",
+                "extras_reference",
                 "geometry",
-                grasp_testkit::geometry_problem(&case["geometry"]),
+                testkit::geometry_problem(&geometry_x),
             ),
         ];
         for (conventions, form, p) in &forms {
@@ -92,7 +108,7 @@ fn unseen_grasps_end_with_the_oracles_status_and_optimum() {
     }
     assert!(!cases.is_empty());
     eprintln!(
-        "{} cases, two conventions and two forms each; {infeasible} infeasible answers; \
+        "{} cases, three settings and two forms each; {infeasible} infeasible answers; \
          largest σ difference exact {:.1e}, N = 4 {:.1e}, 8 {:.1e}, 16 {:.1e}",
         cases.len(),
         worst[0],
