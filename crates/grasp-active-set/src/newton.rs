@@ -467,18 +467,16 @@ impl Newton {
         self.nu_cone.iter_mut().for_each(|v| *v = 0.0);
     }
 
-    /// Whether y = 0 meets every row and cone (within Newton's feasibility tolerance),
-    /// with `y` and the slacks set there.
-    fn origin_holds(&mut self) -> bool {
-        let eq = self.eq;
-        self.y.iter_mut().for_each(|v| *v = 0.0);
-        self.s[eq..].copy_from_slice(&self.b_red[eq..]);
-        self.slacks_at_y = true;
-        let feas = self.feasibility_tolerance();
-        (self.orth.0..self.orth.1).all(|i| self.s[i] >= -feas)
-            && self.socs.iter().all(|&(start, dim)| {
-                soc_excess(self.s[start], &self.s[start + 1..start + dim]) <= feas
-            })
+    /// Whether y = 0 meets every row and cone (within Newton's feasibility tolerance):
+    /// its slacks are the reduced right-hand side.
+    fn origin_holds(&self) -> bool {
+        let s = &self.b_red;
+        let feas = feasibility_tolerance_at(&[]);
+        (self.orth.0..self.orth.1).all(|i| s[i] >= -feas)
+            && self
+                .socs
+                .iter()
+                .all(|&(start, dim)| soc_excess(s[start], &s[start + 1..start + dim]) <= feas)
     }
 
     /// Solves from `self.x` and the guess in `active`/`piece`; on success `x` and `z`
@@ -498,20 +496,23 @@ impl Newton {
         // y = Nᵀ x, unless hot: then y is the last answer's, rescaled with x.
         self.slacks_at_y = false;
         self.left_apex.iter_mut().for_each(|v| *v = false);
+        if self.origin_holds() {
+            // The unconstrained minimum y = 0 (τ = x_p) holds the grasp: it is the
+            // optimum, taken exactly. Dropping a guess's pieces one change at a time
+            // (the polyhedra's, or a warm solve's from a wrench that needed torque)
+            // nears it only through the degenerate pieces of contacts it leaves
+            // unloaded, if at all within MAX_CHANGES.
+            let eq = self.eq;
+            self.y.iter_mut().for_each(|v| *v = 0.0);
+            self.s[eq..].copy_from_slice(&self.b_red[eq..]);
+            self.slacks_at_y = true;
+            self.active.iter_mut().for_each(|a| *a = false);
+            self.piece.iter_mut().for_each(|p| *p = Piece::Inside);
+            self.reset_multipliers();
+            self.finish(form);
+            return true;
+        }
         if !hot {
-            if self.origin_holds() {
-                // The unconstrained minimum y = 0 (τ = x_p) holds the grasp: it is the
-                // optimum, taken exactly. Dropping the guess's pieces one change at a
-                // time reaches it only to rounding (a step through the factor of 2I
-                // leaves ε‖y‖, all of the gradient there, which the certificate's
-                // stationarity, relative to its own terms, refuses), if at all within
-                // MAX_CHANGES.
-                self.active.iter_mut().for_each(|a| *a = false);
-                self.piece.iter_mut().for_each(|p| *p = Piece::Inside);
-                self.reset_multipliers();
-                self.finish(form);
-                return true;
-            }
             // (N's rows are Nᵀ's columns.)
             self.y.iter_mut().for_each(|v| *v = 0.0);
             add_columns(&mut self.y, self.null_basis.as_slice(), &self.x, 1.0);
@@ -1169,7 +1170,7 @@ impl Newton {
 
     /// Scaled data: b has size 1, so absolute tolerances are relative ones.
     fn feasibility_tolerance(&self) -> f64 {
-        1e-10 * norm_inf(&self.y).max(1.0)
+        feasibility_tolerance_at(&self.y)
     }
 
     /// A step along `dx` short enough that no boundary cone's slack crosses its apex
@@ -1764,6 +1765,11 @@ impl Newton {
         }
         Step::Failed
     }
+}
+
+/// How far a slack may be below zero at `y` and still count as held.
+fn feasibility_tolerance_at(y: &[f64]) -> f64 {
+    1e-10 * norm_inf(y).max(1.0)
 }
 
 /// `h += c g gᵀ` on the row-major n × n `h` (whole rows: at these sizes the lower
