@@ -171,7 +171,8 @@ impl Needs {
     fn of(qp: &TorqueQp) -> Self {
         Self {
             exact: qp.constraints.has_exact(),
-            free: qp.model.internal_forces == InternalForces::Free,
+            // (With no passive internal forces, `free` leaves nothing to optimise.)
+            free: qp.model.free_dim() > 0,
         }
     }
 

@@ -420,6 +420,52 @@ fn two_identical_contacts() {
     assert!(free.objective <= fixed.objective * (1.0 + 1e-7));
 }
 
+/// Without passive internal forces (`[G; Jᵀ]` of full column rank), `free` leaves
+/// nothing to optimise: the default backend is then the native one, linear and exact,
+/// with the answers of the fixed choices. With a null space it is Clarabel.
+#[test]
+fn free_internal_forces_without_a_null_space_solve_natively() {
+    let mut native = 0;
+    for seed in 0..20 {
+        for exact in [false, true] {
+            let config = SolverConfig {
+                cones: if exact {
+                    grasp_torque::Cones::Exact
+                } else {
+                    grasp_torque::Cones::Linear
+                },
+                ..Default::default()
+            };
+            for null_space in [false, true] {
+                let mut p = grasp(seed, null_space, 8);
+                let fixed = run(&p, Backend::ActiveSet, exact);
+                p.internal_forces = InternalForces::Free;
+                let mut solver = grasp_torque::GraspSolver::new(&p, &config).unwrap();
+                if solver.problem().model.passive_dim() > 0 {
+                    assert_eq!(solver.backend_name(), "clarabel");
+                    continue;
+                }
+                native += 1;
+                assert_eq!(solver.backend_name(), "active-set");
+                let free = solver.solve(&p.wrench, &WarmStart::default()).unwrap();
+                assert_eq!(free.status, fixed.status, "seed {seed}");
+                let r = rel(free.objective, fixed.objective);
+                // Linear: two decompositions of the same A (observed ≤ 2.8e-14). Exact:
+                // Newton stops each within the certificate's tolerance (≤ 5.2e-12).
+                let tol = if exact { 1e-9 } else { 1e-12 };
+                assert!(
+                    r <= tol,
+                    "seed {seed}, exact {exact}: {} against {} ({r:.1e})",
+                    free.objective,
+                    fixed.objective
+                );
+            }
+        }
+    }
+    // (Some grasps drawn without a null space have one: a finger's joints aligned.)
+    assert!(native >= 20, "{native}");
+}
+
 /// A finger whose two joints are all but the same joint: Jᵀ is nearly singular. The
 /// answer is optimal or infeasible, never a panic or a wrong optimum, and the
 /// backends agree on it.
