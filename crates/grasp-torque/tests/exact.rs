@@ -828,6 +828,39 @@ fn a_control_loop_follows_the_wrench_where_newton_loses_a_force_near_the_apex() 
     }
 }
 
+/// A control loop's chord steps, on factors from another wrench, stop on a rate they
+/// have measured twice. On the first ratio (1.4e-5: the first step takes up the
+/// wrench's change, which those factors map almost exactly) every tick of this grasp
+/// stopped with 4.8e-3 of its last step still to go, 9.4e-10 above the cold σ, and
+/// was certified (the gap's tolerance is relative to terms several times σ). The
+/// chord's own target is 1e-11 of the iterate, about 2e-11 of σ; cold Newton's as
+/// much: 1e-10.
+#[test]
+fn a_control_loops_chord_steps_stop_on_a_measured_rate() {
+    for (seed, friction) in [(11095, 0.25), (10000, 0.25), (0, 1.0)] {
+        let p = grasp(seed, friction);
+        let near: [f64; 6] = std::array::from_fn(|i| p.wrench[i] * if i < 3 { 1.01 } else { 0.99 });
+        let mut ctl = GraspSolver::new(&p, &exact_config()).unwrap();
+        let mut cold = GraspSolver::new(&p, &exact_config()).unwrap();
+        for k in 0..8 {
+            let w = if k % 2 == 0 { p.wrench } else { near };
+            let warm = ctl.resolve(&w).unwrap().clone();
+            let fresh = cold.solve(&w, &WarmStart::default()).unwrap();
+            assert!(
+                warm.is_optimal() && fresh.is_optimal(),
+                "seed {seed} tick {k}"
+            );
+            let r = rel(warm.objective, fresh.objective);
+            assert!(
+                r <= 1e-10,
+                "seed {seed} tick {k}: {} vs {} ({r:.1e})",
+                warm.objective,
+                fresh.objective
+            );
+        }
+    }
+}
+
 /// A control loop of warm re-solves (the hot path: chord iterations on the kept Newton
 /// factors) gives the cold answers, on every bundled fixture, without Clarabel.
 #[test]
