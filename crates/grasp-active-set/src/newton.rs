@@ -471,6 +471,7 @@ impl Newton {
     /// its slacks are the reduced right-hand side.
     fn origin_holds(&self) -> bool {
         let s = &self.b_red;
+        // (At y = 0: no iterate to scale it by.)
         let feas = feasibility_tolerance_at(&[]);
         (self.orth.0..self.orth.1).all(|i| s[i] >= -feas)
             && self
