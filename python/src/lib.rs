@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
 use std::path::Path;
 use std::sync::{Arc, Mutex, OnceLock};
+use std::time::Instant;
 
 fn invalid(message: impl ToString) -> PyErr {
     PyValueError::new_err(message.to_string())
@@ -875,6 +876,12 @@ fn solve_batch(
 
 /// Runs a batch with the GIL released, writing each answer into `out`; returns the
 /// rejected items' messages in item order.
+///
+/// The grasps go in spans of about [`SPAN_SECONDS`], and between spans the GIL is
+/// taken back to run Python's signal handlers: Ctrl-C stops a batch of millions of
+/// grasps within a span, with the answers of the spans before it written, instead of
+/// after the whole batch. Each grasp is solved as in one span (its wrenches together,
+/// on a worker's buffers), so the answers are the same bit for bit.
 fn run_batch<S: BatchSource>(
     py: Python<'_>,
     source: &S,
@@ -883,21 +890,71 @@ fn run_batch<S: BatchSource>(
     out: &Outputs,
 ) -> PyResult<Vec<(usize, usize, String)>> {
     let errors = Mutex::new(Vec::new());
-    let result = py.detach(|| {
-        for_each_solution(source, config, options, |gi, ki, r| {
-            if let Err(e) = r {
-                errors
-                    .lock()
-                    .unwrap_or_else(|p| p.into_inner())
-                    .push((gi, ki, e.to_string()));
-            }
-            out.write(gi, ki, r);
-        })
-    });
-    result.map_err(invalid)?;
+    let total = source.grasps();
+    let (mut start, mut len) = (0, FIRST_SPAN);
+    while start < total {
+        len = len.min(total - start);
+        let span = Span { source, start, len };
+        let clock = Instant::now();
+        let result = py.detach(|| {
+            for_each_solution(&span, config, options, |gi, ki, r| {
+                let gi = start + gi;
+                if let Err(e) = r {
+                    errors
+                        .lock()
+                        .unwrap_or_else(|p| p.into_inner())
+                        .push((gi, ki, e.to_string()));
+                }
+                out.write(gi, ki, r);
+            })
+        });
+        result.map_err(invalid)?;
+        start += len;
+        py.check_signals()?;
+        // The next span takes about SPAN_SECONDS at this span's pace (within a factor
+        // of 8 of this one, so that one odd span does not swing it far).
+        let pace = clock.elapsed().as_secs_f64() / len as f64;
+        let next = if pace > 0.0 {
+            SPAN_SECONDS / pace
+        } else {
+            f64::INFINITY
+        };
+        len = (next.min((8 * len) as f64) as usize).max(len / 8).max(1);
+    }
     let mut errors = errors.into_inner().unwrap_or_else(|p| p.into_inner());
     errors.sort_by_key(|e| (e.0, e.1));
     Ok(errors)
+}
+
+/// How long a batch runs between two looks at Python's signals: Ctrl-C is answered
+/// within about this, and a span boundary (the workers waiting for the span's last
+/// grasp) costs well under 1 % of it.
+const SPAN_SECONDS: f64 = 0.05;
+
+/// The first span's grasps, before the batch's pace is known: a few milliseconds of
+/// the cheapest grasps, a fraction of a second of the dearest.
+const FIRST_SPAN: usize = 256;
+
+/// Grasps `start .. start + len` of a batch, as a batch of their own.
+struct Span<'a, S: ?Sized> {
+    source: &'a S,
+    start: usize,
+    len: usize,
+}
+
+impl<S: BatchSource + ?Sized> BatchSource for Span<'_, S> {
+    fn grasps(&self) -> usize {
+        self.len
+    }
+    fn wrenches(&self, g: usize) -> usize {
+        self.source.wrenches(self.start + g)
+    }
+    fn problem(&self, g: usize) -> Result<Cow<'_, GraspProblem>, Error> {
+        self.source.problem(self.start + g)
+    }
+    fn wrench(&self, g: usize, k: usize) -> [f64; 6] {
+        self.source.wrench(self.start + g, k)
+    }
 }
 
 /// The options every grasp of a hand's batch shares.

@@ -5,6 +5,8 @@ import copy
 import json
 import os
 import pickle
+import signal
+import threading
 
 import numpy as np
 import pytest
@@ -73,6 +75,42 @@ def test_a_urdf_hands_batch_matches_its_grasps_one_by_one():
                 assert out.objective[b, kk] == r.objective
                 np.testing.assert_array_equal(out.torque[b, kk], r.torque)
     assert solved >= B * K // 2
+
+
+class Stop(Exception):
+    """What the test's signal handler raises."""
+
+
+def _stop(signum, frame):
+    raise Stop
+
+
+def test_a_signal_stops_a_long_batch_with_the_answers_before_it_written():
+    """Python's signal handlers run while a batch runs, between spans of about 50 ms:
+    Ctrl-C (here SIGUSR1, whose handler raises) stops a planner's long batch early
+    instead of after its last grasp. The spans before it are written, and are what an
+    uninterrupted batch of those grasps gives, bit for bit."""
+    d, hand, q0 = fixture("allegro-pinch")
+    B = 300_000  # several seconds on one thread; the signal comes after half a second
+    q = q0 + np.random.default_rng(3).normal(0, 0.02, (B, len(q0)))
+    W = np.broadcast_to(np.array(d["wrench"]), (B, 6))
+    status = np.full(B, 9, dtype=np.int8)
+    torque = np.full((B, 12), np.nan)
+    old = signal.signal(signal.SIGUSR1, _stop)
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGUSR1))
+    try:
+        timer.start()
+        with pytest.raises(Stop):
+            hand.solve_batch(q, W, d["contacts"], object_pose=pose_of(d), threads=1, status=status, torque=torque)
+    finally:
+        timer.cancel()
+        signal.signal(signal.SIGUSR1, old)
+    done = int((status != 9).sum())
+    assert 0 < done < B
+    assert (status[:done] != 9).all(), "the spans are written in order"
+    full = hand.solve_batch(q[:done], W[:done], d["contacts"], object_pose=pose_of(d), threads=2)
+    np.testing.assert_array_equal(status[:done], full.status)
+    np.testing.assert_array_equal(torque[:done], full.torque)
 
 
 def test_an_mjcf_hands_batch_gives_actuator_forces_within_the_models_limits():
