@@ -790,7 +790,9 @@ class Hand:
                 )
         return q, arrays["positions"], arrays["normals"], pose
 
-    def frames(self, joint_positions: ArrayLike, names: Sequence[str]) -> Tuple[Array, Array]:
+    def frames(
+        self, joint_positions: ArrayLike, names: Sequence[str], *, threads: Optional[int] = None
+    ) -> Tuple[Array, Array]:
         """Where sites and links are: ``(positions, rotations)`` of the frames ``names``
         (MJCF sites, or links) at each configuration, in the model's root frame (a
         URDF's root link, an MJCF's world; ``object_pose`` is given in it).
@@ -800,7 +802,9 @@ class Hand:
         ``[B, k, 3, 3]``, whose columns are the frame's x, y and z axes (a site's z axis
         is a site contact's default normal), without the leading ``B`` for one
         configuration. A planner places the object and the contact points from them:
-        the fingertip sites' centroid as the object's origin, say.
+        the fingertip sites' centroid as the object's origin, say. The configurations are
+        posed on ``threads`` threads (default: one per core) with the GIL released;
+        Ctrl-C stops it between spans of about 50 ms.
         """
         q = _real("joint_positions", joint_positions)
         single = q.ndim == 1
@@ -815,7 +819,7 @@ class Hand:
         frames = [str(n) for n in names]
         P = np.empty((q.shape[0], len(frames), 3))
         R = np.empty((q.shape[0], len(frames), 3, 3))
-        self._native.frames(q, frames, P, R)
+        self._native.frames(q, frames, P, R, _threads(threads))
         return (P[0], R[0]) if single else (P, R)
 
     def arrays(
@@ -829,13 +833,16 @@ class Hand:
         gravity: Union[None, str, ArrayLike] = None,
         object_mass: Optional[float] = None,
         center_of_mass: Optional[ArrayLike] = None,
+        threads: Optional[int] = None,
     ) -> HandArrays:
         """Each grasp's G, Jᵀ and passive torques (the springs', and the links' weight
         with ``gravity``), posed as ``solve_batch`` poses them (same arguments), for
         ``gt.solve_batch``, another solver or a grasp-quality measure. G's columns are the
         contacts' force components in their frames (``docs/geometry.md``), in the object
         frame about its origin; JT's rows are ``joint_names``. With ``object_mass`` (and
-        ``gravity``), ``object_wrench`` is its weight's wrench on the contacts."""
+        ``gravity``), ``object_wrench`` is its weight's wrench on the contacts. The grasps
+        are posed on ``threads`` threads (default: one per core) with the GIL released;
+        Ctrl-C stops it between spans of about 50 ms."""
         q, P, N, pose = self._poses(joint_positions, positions, normals, object_pose)
         g, rows = _gravity(gravity, q.shape[0])
         held = _object(object_mass, center_of_mass)
@@ -849,7 +856,7 @@ class Hand:
         T = None if d["transmission"] is None else np.array(d["transmission"], dtype=np.float64)
         T3 = np.empty((B,) + T.shape) if T is not None and d["transmission_varies"] else None
         OW = None if held is None else np.empty((B, 6))
-        errors = self._native.arrays(q, P, N, pose, rows, spec_json, G, JT, TP, T3, OW)
+        errors = self._native.arrays(q, P, N, pose, rows, spec_json, _threads(threads), G, JT, TP, T3, OW)
         limits = np.full((len(d["torque_limits"]), 2), [-np.inf, np.inf])
         for j, lim in enumerate(d["torque_limits"]):
             if isinstance(lim, list):

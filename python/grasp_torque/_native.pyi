@@ -173,11 +173,12 @@ class Hand:
         poses: Optional[_F64],
         gravity: Optional[_F64],
         spec_json: str,
+        threads: int,
         g: _F64,
         jt: _F64,
         tp: _F64,
         tr: Optional[_F64],
         ow: Optional[_F64],
     ) -> list[tuple[int, str]]: ...
-    def frames(self, q: _F64, names: list[str], pos: _F64, rot: _F64) -> None: ...
+    def frames(self, q: _F64, names: list[str], pos: _F64, rot: _F64, threads: int) -> None: ...
     def __reduce__(self) -> Any: ...

@@ -4,9 +4,9 @@
 
 use grasp_torque::hand::{GraspPose, HandContact, HandGrasps, HeldObject, ObjectPose};
 use grasp_torque::{
-    file::ContactSpec, file::MatrixFile, for_each_solution, Backend, BatchOptions, BatchSource,
-    Error, GraspProblem, GraspSolver, Matrix, Overrides, ProblemError, ProblemParser, SfceSpacing,
-    Solution, SolverConfig, Status, WarmStart,
+    file::ContactSpec, file::MatrixFile, for_each_index, for_each_solution, Backend, BatchOptions,
+    BatchSource, Error, GraspProblem, GraspSolver, Matrix, Overrides, ProblemError, ProblemParser,
+    SfceSpacing, Solution, SolverConfig, Status, WarmStart,
 };
 use numpy::ndarray::{ArrayView2, ArrayView3, Axis};
 use numpy::{
@@ -890,25 +890,38 @@ fn run_batch<S: BatchSource>(
     out: &Outputs,
 ) -> PyResult<Vec<(usize, usize, String)>> {
     let errors = Mutex::new(Vec::new());
-    let total = source.grasps();
+    in_spans(py, source.grasps(), |start, len| {
+        let span = Span { source, start, len };
+        for_each_solution(&span, config, options, |gi, ki, r| {
+            let gi = start + gi;
+            if let Err(e) = r {
+                errors
+                    .lock()
+                    .unwrap_or_else(|p| p.into_inner())
+                    .push((gi, ki, e.to_string()));
+            }
+            out.write(gi, ki, r);
+        })
+        .map_err(invalid)
+    })?;
+    let mut errors = errors.into_inner().unwrap_or_else(|p| p.into_inner());
+    errors.sort_by_key(|e| (e.0, e.1));
+    Ok(errors)
+}
+
+/// Runs `work(start, len)` over the items `0..total` in spans of about
+/// [`SPAN_SECONDS`], each with the GIL released, taking it back between spans to run
+/// Python's signal handlers: Ctrl-C stops a batch of millions of grasps within a span,
+/// with the spans before it done, instead of after the whole batch.
+fn in_spans<F>(py: Python<'_>, total: usize, work: F) -> PyResult<()>
+where
+    F: Fn(usize, usize) -> PyResult<()> + Sync,
+{
     let (mut start, mut len) = (0, FIRST_SPAN);
     while start < total {
         len = len.min(total - start);
-        let span = Span { source, start, len };
         let clock = Instant::now();
-        let result = py.detach(|| {
-            for_each_solution(&span, config, options, |gi, ki, r| {
-                let gi = start + gi;
-                if let Err(e) = r {
-                    errors
-                        .lock()
-                        .unwrap_or_else(|p| p.into_inner())
-                        .push((gi, ki, e.to_string()));
-                }
-                out.write(gi, ki, r);
-            })
-        });
-        result.map_err(invalid)?;
+        py.detach(|| work(start, len))?;
         start += len;
         py.check_signals()?;
         // The next span takes about SPAN_SECONDS at this span's pace (within a factor
@@ -921,9 +934,40 @@ fn run_batch<S: BatchSource>(
         };
         len = (next.min((8 * len) as f64) as usize).max(len / 8).max(1);
     }
-    let mut errors = errors.into_inner().unwrap_or_else(|p| p.into_inner());
-    errors.sort_by_key(|e| (e.0, e.1));
-    Ok(errors)
+    Ok(())
+}
+
+/// An output array filled by parallel workers, `width` numbers per item; each item's
+/// numbers are written by one worker only.
+struct Rows {
+    ptr: *mut f64,
+    width: usize,
+    items: usize,
+}
+
+// SAFETY: workers write disjoint items (`Rows::item`'s contract), and the array outlives
+// the work (its borrow is held across it).
+unsafe impl Sync for Rows {}
+
+impl Rows {
+    fn new(a: &mut [f64], width: usize) -> Self {
+        Self {
+            ptr: a.as_mut_ptr(),
+            width,
+            items: a.len() / width.max(1),
+        }
+    }
+
+    /// Item `i`'s numbers.
+    ///
+    /// # Safety
+    /// No other reference to item `i` may be live: each item goes to one worker.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn item(&self, i: usize) -> &mut [f64] {
+        assert!(self.width == 0 || i < self.items);
+        // SAFETY: i < items, so the item lies within the array; exclusive by contract.
+        unsafe { std::slice::from_raw_parts_mut(self.ptr.add(i * self.width), self.width) }
+    }
 }
 
 /// How long a batch runs between two looks at Python's signals: Ctrl-C is answered
@@ -1171,12 +1215,16 @@ impl Hand {
         poses: Option<PyReadonlyArray2<'_, f64>>,
         gravity: Option<PyReadonlyArray2<'_, f64>>,
         spec_json: &str,
+        threads: usize,
         mut g: PyReadwriteArrayDyn<'_, f64>,
         mut jt: PyReadwriteArrayDyn<'_, f64>,
         mut tp: PyReadwriteArrayDyn<'_, f64>,
         mut tr: Option<PyReadwriteArrayDyn<'_, f64>>,
         mut ow: Option<PyReadwriteArrayDyn<'_, f64>>,
     ) -> PyResult<Vec<(usize, String)>> {
+        if threads == 0 {
+            return Err(invalid("threads: expected at least 1 worker thread, got 0"));
+        }
         let (grasps, _) = self.grasps(from_keywords(spec_json)?, &Settings::default())?;
         let source = Posed::new(grasps, &q, None, &positions, &normals, &poses, &gravity)?;
         let b = source.q.nrows();
@@ -1193,21 +1241,34 @@ impl Hand {
         let tp = contiguous_out("passive_torque", &mut tp, &[b, m])?;
         // Each grasp's T, when it varies with the configuration.
         let a = source.grasps.template().actuated();
-        let mut tr = match tr.as_mut() {
-            Some(t) => Some(contiguous_out("transmission", t, &[b, m, a])?),
+        let tr = match tr.as_mut() {
+            Some(t) => Some(Rows::new(
+                contiguous_out("transmission", t, &[b, m, a])?,
+                m * a,
+            )),
             None => None,
         };
-        let mut ow = match ow.as_mut() {
-            Some(w) => Some(contiguous_out("object_wrench", w, &[b, 6])?),
+        let ow = match ow.as_mut() {
+            Some(w) => Some(Rows::new(contiguous_out("object_wrench", w, &[b, 6])?, 6)),
             None => None,
         };
-        Ok(py.detach(|| {
-            let mut errors = Vec::new();
-            let blocks = g
-                .chunks_exact_mut(6 * n)
-                .zip(jt.chunks_exact_mut(m * n))
-                .zip(tp.chunks_exact_mut(m));
-            for (i, ((gb, jb), tb)) in blocks.enumerate() {
+        let (g, jt, tp) = (Rows::new(g, 6 * n), Rows::new(jt, m * n), Rows::new(tp, m));
+        let options = BatchOptions {
+            threads: Some(threads),
+            ..BatchOptions::default()
+        };
+        let errors = Mutex::new(Vec::new());
+        in_spans(py, b, |start, len| {
+            for_each_index(len, &options, |i| {
+                let i = start + i;
+                // SAFETY: each index is posed once, by one worker.
+                let (gb, jb, tb) = unsafe { (g.item(i), jt.item(i), tp.item(i)) };
+                let (trb, owb) = unsafe {
+                    (
+                        tr.as_ref().map(|t| t.item(i)),
+                        ow.as_ref().map(|w| w.item(i)),
+                    )
+                };
                 match source.problem(i) {
                     Ok(p) => {
                         gb.copy_from_slice(p.grasp_matrix.as_slice());
@@ -1216,29 +1277,32 @@ impl Hand {
                             Some(t) => tb.copy_from_slice(t),
                             None => tb.fill(0.0),
                         }
-                        if let (Some(out), Some(t)) = (tr.as_deref_mut(), &p.transmission) {
-                            out[i * m * a..(i + 1) * m * a].copy_from_slice(t.matrix.as_slice());
+                        if let (Some(out), Some(t)) = (trb, &p.transmission) {
+                            out.copy_from_slice(t.matrix.as_slice());
                         }
-                        if let Some(out) = ow.as_deref_mut() {
-                            out[i * 6..(i + 1) * 6].copy_from_slice(&source.wrench(i, 0));
+                        if let Some(out) = owb {
+                            out.copy_from_slice(&source.wrench(i, 0));
                         }
                     }
                     Err(e) => {
-                        gb.fill(f64::NAN);
-                        jb.fill(f64::NAN);
-                        tb.fill(f64::NAN);
-                        if let Some(out) = tr.as_deref_mut() {
-                            out[i * m * a..(i + 1) * m * a].fill(f64::NAN);
+                        for out in [Some(gb), Some(jb), Some(tb), trb, owb]
+                            .into_iter()
+                            .flatten()
+                        {
+                            out.fill(f64::NAN);
                         }
-                        if let Some(out) = ow.as_deref_mut() {
-                            out[i * 6..(i + 1) * 6].fill(f64::NAN);
-                        }
-                        errors.push((i, e.to_string()));
+                        errors
+                            .lock()
+                            .unwrap_or_else(|p| p.into_inner())
+                            .push((i, e.to_string()));
                     }
                 }
-            }
-            errors
-        }))
+            })
+            .map_err(invalid)
+        })?;
+        let mut errors = errors.into_inner().unwrap_or_else(|p| p.into_inner());
+        errors.sort_by_key(|e| e.0);
+        Ok(errors)
     }
 
     /// Where the frames `names` (MJCF sites, or links) are at each row of `q`, in the
@@ -1251,7 +1315,11 @@ impl Hand {
         names: Vec<String>,
         mut pos: PyReadwriteArrayDyn<'_, f64>,
         mut rot: PyReadwriteArrayDyn<'_, f64>,
+        threads: usize,
     ) -> PyResult<()> {
+        if threads == 0 {
+            return Err(invalid("threads: expected at least 1 worker thread, got 0"));
+        }
         let r = &self.robot;
         let q = q.as_array();
         let (b, k) = (q.nrows(), names.len());
@@ -1285,24 +1353,27 @@ impl Hand {
             // No frames asked for: the (B, 0, 3) and (B, 0, 3, 3) outputs are complete.
             return Ok(());
         }
-        py.detach(|| {
-            let mut qb = vec![0.0; q.ncols()];
-            for (row, (pb, rb)) in pos
-                .chunks_exact_mut(3 * k)
-                .zip(rot.chunks_exact_mut(9 * k))
-                .enumerate()
-            {
-                qb.iter_mut().zip(q.row(row)).for_each(|(a, &v)| *a = v);
+        let (pos, rot) = (Rows::new(pos, 3 * k), Rows::new(rot, 9 * k));
+        let options = BatchOptions {
+            threads: Some(threads),
+            ..BatchOptions::default()
+        };
+        in_spans(py, b, |start, len| {
+            for_each_index(len, &options, |row| {
+                let row = start + row;
+                let qb: Vec<f64> = q.row(row).to_vec();
                 let pose = r.pose_of(&qb, &needed);
+                // SAFETY: each row is placed once, by one worker.
+                let (pb, rb) = unsafe { (pos.item(row), rot.item(row)) };
                 for (i, &(link, offset)) in frames.iter().enumerate() {
                     let x = pose.links[link] * offset;
                     pb[3 * i..3 * i + 3].copy_from_slice(&x.translation.to_array());
                     let m = x.rotation.to_rotation_matrix();
                     rb[9 * i..9 * i + 9].copy_from_slice(m.as_flattened());
                 }
-            }
-        });
-        Ok(())
+            })
+            .map_err(invalid)
+        })
     }
 
     fn __repr__(&self) -> String {

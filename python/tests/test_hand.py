@@ -254,6 +254,40 @@ def test_arrays_are_the_hand_forms_matrices_and_solve_as_the_hand_batch(name):
     np.testing.assert_array_equal(via.torque, direct.torque)
 
 
+@pytest.mark.parametrize("name", [p.stem for p in sorted(HANDS.glob("*.json"))])
+def test_arrays_and_frames_are_the_same_on_any_number_of_threads(name):
+    """Hand.arrays and Hand.frames pose their grasps in parallel, in spans (more than
+    one here): one thread and two give the same arrays bit for bit, a rejected grasp's
+    NaN rows and message included."""
+    d, hand, q0 = fixture(name)
+    B = 3000
+    q = q0 + np.random.default_rng(5).normal(0, 0.02, (B, len(q0)))
+    q[1234, -1] = np.nan
+    kw = {"object_pose": pose_of(d)}
+    if "gravity" in d["hand"]:
+        kw["gravity"] = d["hand"]["gravity"]
+    if "object" in d:
+        kw["object_mass"] = d["object"]["mass"]
+        kw["center_of_mass"] = d["object"].get("center_of_mass")
+    one = hand.arrays(q, d["contacts"], threads=1, **kw)
+    two = hand.arrays(q, d["contacts"], threads=2, **kw)
+    assert set(one.errors) == {1234} and one.errors == two.errors
+    for field in ("G", "JT", "transmission", "passive_torque", "object_wrench"):
+        a, b = getattr(one, field), getattr(two, field)
+        assert (a is None) == (b is None), field
+        if a is not None:
+            np.testing.assert_array_equal(a, b, err_msg=field)
+    assert np.isnan(one.G[1234]).all() and not np.isnan(one.G[:1234]).any()
+    q[1234, -1] = 0.0
+    names = hand.sites or hand.links
+    for a, b in zip(hand.frames(q, names, threads=1), hand.frames(q, names, threads=2)):
+        np.testing.assert_array_equal(a, b)
+    with pytest.raises(ValueError, match="threads"):
+        hand.arrays(q, d["contacts"], threads=0, **kw)
+    with pytest.raises(ValueError, match="threads"):
+        hand.frames(q, names, threads=0)
+
+
 def contact_frame(n):
     """(t1, t2, n) of docs/geometry.md."""
     a0 = np.array([0.0, 1.0, 0.0]) if abs(n[0]) >= 0.9 else np.array([1.0, 0.0, 0.0])

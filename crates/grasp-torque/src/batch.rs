@@ -174,6 +174,17 @@ where
     })
 }
 
+/// Calls `f(i)` for every `i` in `0..count`, in parallel on the batch's threads (as
+/// [`for_each_solution`] runs its grasps), in no particular order: the per-grasp work of
+/// a planner's batch besides solving, such as posing a hand's candidates into arrays
+/// (`HandGrasps::pose`) or placing their frames.
+pub fn for_each_index<F>(count: usize, options: &BatchOptions, f: F) -> Result<(), BatchError>
+where
+    F: Fn(usize) + Sync + Send,
+{
+    run_in(options, || (0..count).into_par_iter().for_each(f))
+}
+
 /// A worker's buffers, reused for every grasp it takes.
 #[derive(Default)]
 struct Worker {

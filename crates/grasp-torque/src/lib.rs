@@ -20,7 +20,8 @@ pub use backend::{Backend, BackendError, Cones, Overrides, SolverConfig};
 pub mod batch;
 pub mod sweep;
 pub use batch::{
-    for_each_solution, solve_batch, BatchError, BatchGrasp, BatchOptions, BatchResult, BatchSource,
+    for_each_index, for_each_solution, solve_batch, BatchError, BatchGrasp, BatchOptions,
+    BatchResult, BatchSource,
 };
 
 use std::sync::Arc;

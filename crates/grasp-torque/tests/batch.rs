@@ -3,8 +3,8 @@
 
 use grasp_testkit::{reference_cases, reference_geometry, reference_problem};
 use grasp_torque::{
-    for_each_solution, load_problem, solve_batch, BatchError, BatchGrasp, BatchOptions,
-    GraspProblem, GraspSolver, SolverConfig, Status, WarmStart,
+    for_each_index, for_each_solution, load_problem, solve_batch, BatchError, BatchGrasp,
+    BatchOptions, GraspProblem, GraspSolver, SolverConfig, Status, WarmStart,
 };
 use std::sync::Mutex;
 
@@ -244,4 +244,28 @@ fn for_each_solution_sees_every_pair_once() {
     )
     .unwrap();
     assert!(seen.into_inner().unwrap().iter().all(|&c| c == 1));
+}
+
+#[test]
+fn for_each_index_visits_every_index_once_on_any_pool() {
+    for threads in [None, Some(1), Some(2), Some(3)] {
+        let options = BatchOptions {
+            threads,
+            ..BatchOptions::default()
+        };
+        let seen = Mutex::new(vec![0u32; 1000]);
+        for_each_index(1000, &options, |i| seen.lock().unwrap()[i] += 1).unwrap();
+        assert!(
+            seen.into_inner().unwrap().iter().all(|&c| c == 1),
+            "{threads:?}"
+        );
+    }
+    let none = BatchOptions {
+        threads: Some(0),
+        ..BatchOptions::default()
+    };
+    assert!(matches!(
+        for_each_index(3, &none, |_| {}),
+        Err(BatchError::NoThreads)
+    ));
 }
