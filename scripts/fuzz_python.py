@@ -95,7 +95,7 @@ def main():
             elif which == "frames":
                 q = mutate(rnd, np.zeros((max(b, 1), len(hand.joint_names))))
                 names = rnd.choice([[], ["link_3.0_tip"], ["link_3.0_tip", "base_link"], ["nope"], [1], "link_3.0_tip"])
-                P, R = hand.frames(q, names)
+                P, R = hand.frames(q, names, threads=rnd.choice([None, 1, 2, 3, 0, -1, 1025, 2.5, "2"]))
                 ok = bool(np.all(np.isfinite(P)) and np.all(np.isfinite(R)))
             elif which == "arrays":
                 q = mutate(rnd, np.zeros((max(b, 1), len(hand.joint_names))))
@@ -109,6 +109,7 @@ def main():
                     shape = {"positions": (len(q), 2, 3), "normals": (len(q), 2, 3),
                              "object_pose": (len(q), 7), "gravity": (len(q), 3)}[k]
                     extra[k] = mutate(rnd, np.ones(shape))
+                extra["threads"] = rnd.choice([None, 1, 2, 3, 0, -1, 1025, 2.5, "2"])
                 a = hand.arrays(q, tips, **extra)
                 good = [i for i in range(len(q)) if i not in a.errors]
                 ok = bool(np.all(np.isfinite(a.G[good])) and np.all(np.isfinite(a.JT[good])))
