@@ -633,22 +633,17 @@ fn to_matrix(a: ArrayView2<'_, f64>) -> Matrix {
     Matrix::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)])
 }
 
-/// Output array pointers, written by the workers at disjoint indices.
+/// A batch's output arrays, each item `b · K + k` written once, by the worker that
+/// solved (grasp b, wrench k).
 struct Outputs {
-    torque: *mut f64,
-    objective: *mut f64,
-    residual: *mut f64,
-    status: *mut i8,
+    torque: Rows<f64>,
+    objective: Rows<f64>,
+    residual: Rows<f64>,
+    status: Rows<i8>,
     /// `[B, K, n]`, when the caller asked for the contact forces.
-    forces: Option<*mut f64>,
+    forces: Option<Rows<f64>>,
     wrenches: usize,
-    joints: usize,
-    force_dim: usize,
 }
-
-// SAFETY: each (grasp, wrench) pair is emitted exactly once, and writes only its own
-// elements; the arrays outlive the batch (their borrows are held across it).
-unsafe impl Sync for Outputs {}
 
 impl Outputs {
     /// The output arrays for `[B, K, m]` (and `[B, K, n]` contact forces), checked
@@ -662,17 +657,21 @@ impl Outputs {
         forces: Option<&mut PyReadwriteArrayDyn<'_, f64>>,
     ) -> PyResult<Self> {
         Ok(Self {
-            torque: contiguous_out("torque", torque, &[b, k, m])?.as_mut_ptr(),
-            objective: contiguous_out("objective", objective, &[b, k])?.as_mut_ptr(),
-            residual: contiguous_out("wrench_residual", wrench_residual, &[b, k])?.as_mut_ptr(),
-            status: contiguous_out("status", status, &[b, k])?.as_mut_ptr(),
+            torque: Rows::new(contiguous_out("torque", torque, &[b, k, m])?, m),
+            objective: Rows::new(contiguous_out("objective", objective, &[b, k])?, 1),
+            residual: Rows::new(
+                contiguous_out("wrench_residual", wrench_residual, &[b, k])?,
+                1,
+            ),
+            status: Rows::new(contiguous_out("status", status, &[b, k])?, 1),
             forces: match forces {
-                Some(f) => Some(contiguous_out("contact_forces", f, &[b, k, n])?.as_mut_ptr()),
+                Some(f) => Some(Rows::new(
+                    contiguous_out("contact_forces", f, &[b, k, n])?,
+                    n,
+                )),
                 None => None,
             },
             wrenches: k,
-            joints: m,
-            force_dim: n,
         })
     }
 
@@ -688,21 +687,19 @@ impl Outputs {
             Ok(s) => (status_code(s.status), f64::NAN, f64::NAN, None),
             Err(_) => (INVALID, f64::NAN, f64::NAN, None),
         };
-        // SAFETY: i < B·K and the torque row i·m .. (i+1)·m is within B·K·m (shapes
-        // checked before the batch); no other worker writes index i.
+        // SAFETY: each (grasp, wrench) pair is emitted once, so item i is this call's.
         unsafe {
-            *self.status.add(i) = code;
-            *self.objective.add(i) = objective;
-            *self.residual.add(i) = residual;
-            let row = std::slice::from_raw_parts_mut(self.torque.add(i * self.joints), self.joints);
+            self.status.item(i)[0] = code;
+            self.objective.item(i)[0] = objective;
+            self.residual.item(i)[0] = residual;
+            let row = self.torque.item(i);
             match answer {
                 Some(s) => row.copy_from_slice(&s.torque),
                 None => row.fill(f64::NAN),
             }
-            // Likewise the row i·n .. (i+1)·n of B·K·n.
-            if let Some(f) = self.forces {
-                let row = std::slice::from_raw_parts_mut(f.add(i * self.force_dim), self.force_dim);
-                match answer.filter(|s| s.contact_forces.len() == self.force_dim) {
+            if let Some(f) = &self.forces {
+                let row = f.item(i);
+                match answer.filter(|s| s.contact_forces.len() == row.len()) {
                     Some(s) => row.copy_from_slice(&s.contact_forces),
                     None => row.fill(f64::NAN),
                 }
@@ -937,20 +934,20 @@ where
     Ok(())
 }
 
-/// An output array filled by parallel workers, `width` numbers per item; each item's
-/// numbers are written by one worker only.
-struct Rows {
-    ptr: *mut f64,
+/// An output array filled by parallel workers, `width` entries per item; each item's
+/// entries are written by one worker only.
+struct Rows<T> {
+    ptr: *mut T,
     width: usize,
     items: usize,
 }
 
 // SAFETY: workers write disjoint items (`Rows::item`'s contract), and the array outlives
 // the work (its borrow is held across it).
-unsafe impl Sync for Rows {}
+unsafe impl<T: Send> Sync for Rows<T> {}
 
-impl Rows {
-    fn new(a: &mut [f64], width: usize) -> Self {
+impl<T> Rows<T> {
+    fn new(a: &mut [T], width: usize) -> Self {
         Self {
             ptr: a.as_mut_ptr(),
             width,
@@ -958,12 +955,12 @@ impl Rows {
         }
     }
 
-    /// Item `i`'s numbers.
+    /// Item `i`'s entries.
     ///
     /// # Safety
     /// No other reference to item `i` may be live: each item goes to one worker.
     #[allow(clippy::mut_from_ref)]
-    unsafe fn item(&self, i: usize) -> &mut [f64] {
+    unsafe fn item(&self, i: usize) -> &mut [T] {
         assert!(self.width == 0 || i < self.items);
         // SAFETY: i < items, so the item lies within the array; exclusive by contract.
         unsafe { std::slice::from_raw_parts_mut(self.ptr.add(i * self.width), self.width) }
