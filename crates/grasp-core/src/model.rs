@@ -25,7 +25,7 @@ use crate::by_name::ByName;
 use crate::contact::ContactModel;
 use crate::error::ModelError;
 use crate::linalg::{decompose, RankThreshold};
-use crate::matrix::{add_columns, column_major, dot, norm_inf, write_columns, Matrix};
+use crate::matrix::{add_columns, column_major, dot, norm2, norm_inf, write_columns, Matrix};
 use crate::problem::{GraspProblem, TorqueLimit};
 use serde::Serialize;
 
@@ -590,11 +590,25 @@ impl GraspModel {
             None => Passive::default(),
             Some(tp) => {
                 let eq_offset: Vec<f64> = eq_passive.iter().map(|v| -v).collect();
-                // u_p = D⁻¹ (C D⁻¹)⁺ e_p with D = diag(√w): the least Σ w_j u_j².
+                // u_p = D⁻¹ (C D⁻¹)⁺ e_p with D = diag(√w): the least Σ w_j u_j². Each
+                // row (with its e_p) is normalised first: the rows are independent, but
+                // their scales span as many orders as the equilibration's (an actuator
+                // that moves no contact has a row of rounding, scaled up), and a
+                // relative rank decision on the raw rows dropped the small ones, so
+                // that u_p missed them.
                 let mut torque_offset = vec![0.0; m];
                 if eq.nrows() > 0 {
                     let dinv_w: Vec<f64> = weights.iter().map(|w| 1.0 / w.sqrt()).collect();
-                    let cd = Matrix::from_fn(eq.nrows(), m, |i, j| eq[(i, j)] * dinv_w[j]);
+                    let mut cd = Matrix::from_fn(eq.nrows(), m, |i, j| eq[(i, j)] * dinv_w[j]);
+                    let mut ep = eq_offset.clone();
+                    for (i, e) in ep.iter_mut().enumerate() {
+                        let row = cd.row_mut(i);
+                        let nrm = norm2(row);
+                        if nrm > 0.0 {
+                            row.iter_mut().for_each(|v| *v /= nrm);
+                            *e /= nrm;
+                        }
+                    }
                     let pinv = decompose(&cd, RankThreshold::Relative(1e-13))
                         .map_err(|_| ModelError::Decomposition {
                             what: "the consistency equalities",
@@ -603,7 +617,7 @@ impl GraspModel {
                         })?
                         .pseudo_inverse();
                     for (j, t) in torque_offset.iter_mut().enumerate() {
-                        *t = dinv_w[j] * dot(pinv.row(j), &eq_offset);
+                        *t = dinv_w[j] * dot(pinv.row(j), &ep);
                     }
                 }
                 let solver_force = (0..n)
