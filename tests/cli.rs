@@ -445,3 +445,44 @@ fn oversized_linearisations_and_zero_wrenches() {
     let s: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(s["objective"].as_f64().unwrap(), 0.0);
 }
+
+/// The exact solver's hard grasps (`fixtures/sweep`, README there) end with an answer
+/// from the command line: optimal (exit 0) or infeasible with its reason (exit 3). One
+/// of them, whose consistency equalities fix the torque, panicked before: its point
+/// lies just outside a cone, which the ray of that cone now proves.
+#[test]
+fn the_sweeps_hard_grasps_are_answered_on_the_exact_cones() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/sweep");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 9, "{files:?}");
+    for f in &files {
+        let out = run(&[
+            "solve",
+            f.to_str().unwrap(),
+            "--cones",
+            "exact",
+            "--format",
+            "json",
+        ]);
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout)
+            .unwrap_or_else(|e| panic!("{f:?}: {e}: {}", String::from_utf8_lossy(&out.stderr)));
+        match v["status"].as_str() {
+            Some("optimal") => assert_eq!(out.status.code(), Some(0), "{f:?}"),
+            Some("infeasible") => {
+                assert_eq!(out.status.code(), Some(3), "{f:?}");
+                assert!(v["reason"]["kind"].is_string(), "{f:?}");
+            }
+            other => panic!("{f:?}: {other:?} {}", v["reason"]),
+        }
+        if f.ends_with("sweep-992275-friction-1.json") {
+            assert_eq!(v["status"], "infeasible");
+            assert_eq!(v["method"], "closed_form");
+            assert_eq!(v["reason"]["kind"], "dual_ray");
+        }
+    }
+}

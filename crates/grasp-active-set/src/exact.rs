@@ -4,7 +4,9 @@
 //! A solve:
 //! 0. where the equalities leave at most one free direction, solves the problem in
 //!    closed form ([`Newton::solve_line`]), certified as in step 3
-//!    (`method: "closed_form"`); where that cannot decide, goes on:
+//!    (`method: "closed_form"`). With none, the one point they admit decides: if its
+//!    certificate refuses it, the piece it misses is a ray of the dual
+//!    ([`separating_piece`]). Where the closed form cannot decide, goes on:
 //! 1. solves the problem with the inscribed polyhedra (`N = 8`) by the active-set
 //!    method. Their key constraint set says, per contact, whether the force is inside
 //!    its cone or on its boundary: that guess starts the active-set Newton method of
@@ -44,6 +46,7 @@ use grasp_core::{
     TorqueSolver, WarmStart,
 };
 
+use grasp_core::conic::soc_excess;
 pub use grasp_core::conic::CERTIFICATE_TOLERANCE;
 
 /// Sides of the polygons of the feasibility proofs.
@@ -138,6 +141,59 @@ fn ray_of(
         value: ray.value,
         stationarity: ray.stationarity,
     })
+}
+
+/// Where the equalities leave no free direction, the slacks `s_p = b − A x_p` of the one
+/// point they admit decide the grasp: a piece of the cones they miss separates `s_p`
+/// from every feasible slack. Writes into `z` (rows `eq..`; zero elsewhere) the dual
+/// vector of the piece missed by most against its terms (as [`ConicForm::dual_ray`]
+/// measures them): `e_i` on a nonnegative row (`s_i < 0`), `(1, −s1/‖s1‖)` on a
+/// second-order cone (`zᵀ s_p = s0 − ‖s1‖ < 0`; `(1, 0)` at `s1 = 0`). False if every
+/// piece holds.
+fn separating_piece(conic: &ConicForm, b: &[f64], sp: &[f64], z: &mut [f64]) -> bool {
+    z.iter_mut().for_each(|v| *v = 0.0);
+    // The worst piece: (relative miss, first row, rows, ‖s1‖ on a cone).
+    let mut worst: Option<(f64, usize, usize, f64)> = None;
+    let mut consider = |miss: f64, size: f64, start: usize, dim: usize, norm: f64| {
+        let rel = miss / size.max(f64::MIN_POSITIVE);
+        if miss > 0.0 && worst.is_none_or(|w| rel > w.0) {
+            worst = Some((rel, start, dim, norm));
+        }
+    };
+    let terms = |i: usize| b[i].abs() + (b[i] - sp[i]).abs();
+    let mut start = 0;
+    for cone in &conic.cones {
+        let dim = cone.dim();
+        match cone {
+            grasp_core::ConeKind::Zero(_) => {}
+            grasp_core::ConeKind::Nonnegative(_) => {
+                for i in start..start + dim {
+                    consider(-sp[i], terms(i), i, 1, 0.0);
+                }
+            }
+            grasp_core::ConeKind::SecondOrder(_) => {
+                let miss = soc_excess(sp[start], &sp[start + 1..start + dim]);
+                // ‖s1‖ where the cone is missed; |z|ᵀ terms with |z_j| = |s_j| / ‖s1‖.
+                let norm = miss + sp[start];
+                let size = terms(start)
+                    + (start + 1..start + dim)
+                        .map(|i| terms(i) * sp[i].abs() / norm.max(f64::MIN_POSITIVE))
+                        .sum::<f64>();
+                consider(miss, size, start, dim, norm);
+            }
+        }
+        start += dim;
+    }
+    let Some((_, start, dim, norm)) = worst else {
+        return false;
+    };
+    z[start] = 1.0;
+    if norm > 0.0 {
+        for i in start + 1..start + dim {
+            z[i] = -sp[i] / norm;
+        }
+    }
+    true
 }
 
 /// `qp` with every exact cone replaced by a polyhedron from `cone`.
@@ -588,6 +644,48 @@ impl ExactSolver {
         )
     }
 
+    /// The one point the equalities admit, which its certificate refused: the piece it
+    /// misses by most ([`separating_piece`]) is a ray of the dual, checked from scratch
+    /// (`infeasible`, `method: "closed_form"`). Nothing else can hold the grasp, so a
+    /// ray that fails its check (a miss beyond the certificate's tolerance by one
+    /// measure and within it by the other, or equalities that `x_p` misses) leaves a
+    /// numerical failure.
+    fn refuse_point(&mut self, w: &[f64; 6], alpha: f64, out: &mut Solution) {
+        self.hot = None;
+        out.method = Some("closed_form");
+        let (xp, sp) = self.newton.reduced_rhs(w, alpha);
+        let ray = separating_piece(&self.conic, &self.b, sp, &mut self.dual).then(|| {
+            self.conic.dual_ray(
+                &self.b,
+                xp,
+                &self.dual,
+                CERTIFICATE_TOLERANCE,
+                &mut self.scratch,
+            )
+        });
+        if let Some(r) = ray.filter(|r| r.passed) {
+            let reason = Reason::DualRay {
+                value: r.value,
+                stationarity: r.stationarity,
+            };
+            return Self::infeasible(out, reason);
+        }
+        let c = self.certificate;
+        out.status = Status::NumericalFailure;
+        out.reason = Some(Reason::Backend {
+            backend: "active-set",
+            message: format!(
+                "the consistency equalities fix the torque, and it failed its certificate (primal {:.1e}, stationarity {:.1e}; tolerance {CERTIFICATE_TOLERANCE:.0e}) without a ray of the dual to prove the grasp infeasible{}",
+                c.primal,
+                c.stationarity,
+                ray.map_or(String::new(), |r| format!(
+                    " (value {:.1e}, equalities {:.1e})",
+                    r.value, r.particular
+                )),
+            ),
+        });
+    }
+
     fn infeasible(out: &mut Solution, reason: Reason) {
         out.status = Status::Infeasible;
         out.reason = Some(reason);
@@ -628,6 +726,10 @@ impl TorqueSolver for ExactSolver {
         // At most one free direction: the closed form, warm or cold.
         if self.newton.is_line() && self.solve_line(w, alpha, out) {
             return;
+        }
+        // None: the one point the equalities admit is the whole problem, refused.
+        if self.newton.is_point() {
+            return self.refuse_point(w, alpha, out);
         }
         // Hot: Newton from the previous answer and its pieces (the scaled problem's
         // solution scales with 1/α).
@@ -942,11 +1044,18 @@ mod tests {
             let (w, cold) = (&p.wrench, &WarmStart::default());
             let mut out = Solution::default();
             s.solve_raw(w, cold, &mut out);
-            if out.method != Some("closed_form") {
-                // (Only a grasp the general path proves infeasible.)
-                assert_eq!(out.status, Status::Infeasible, "seed {seed}");
+            if out.status != Status::Optimal {
+                // (Only a grasp the general path, or the ray of the one point the
+                // equalities admit, proves infeasible.)
+                assert_eq!(
+                    out.status,
+                    Status::Infeasible,
+                    "seed {seed}: {:?}",
+                    out.reason
+                );
                 continue;
             }
+            assert_eq!(out.method, Some("closed_form"), "seed {seed}");
             closed[s.newton.free_directions()] += 1;
             let sigma = sigma_of(&s.newton.x, s.conic.joints);
             let alpha = s.conic.b_into(w, &mut s.b);

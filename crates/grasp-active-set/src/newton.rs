@@ -753,6 +753,12 @@ impl Newton {
         self.n <= 1 && self.null_basis.nrows() == self.xp.len()
     }
 
+    /// Whether the equalities leave no free direction (`k = 0`): `x_p` is then the only
+    /// point they admit, and decides the grasp alone.
+    pub(crate) fn is_point(&self) -> bool {
+        self.n == 0 && self.null_basis.nrows() == self.xp.len()
+    }
+
     /// The problem when the equalities leave at most one free direction (a hand whose
     /// consistency rows fix all but one combination of its torques), in closed form.
     /// Along y each slack is affine, `s(y) = c + d y`: a row admits a half-line, a cone
@@ -763,20 +769,29 @@ impl Newton {
     /// where this cannot decide, for the general path: an empty intersection (an
     /// infeasible grasp, which the general path proves), a line along a cone's
     /// boundary direction, the clamping cone at its apex, coefficients out of range,
-    /// an answer beyond [`LINE_LIMIT`], a multiplier of the wrong sign.
+    /// an answer beyond [`LINE_LIMIT`], a multiplier of the wrong sign. Without a free
+    /// direction, the one point the equalities admit, with no multiplier: the
+    /// certificate judges it (a miss within its tolerance is rounding; one beyond it,
+    /// a ray of the dual).
     pub(crate) fn solve_line(&mut self, form: &ConicForm, w: &[f64; 6], alpha: f64) -> bool {
-        if !self.is_line() || form.free > 0 {
+        if !self.is_line() {
             return false;
         }
         self.set_wrench(w, alpha);
         self.frozen = None;
         self.iterations = 0;
-        // d = −(A N), the slacks' change along y (none without a free direction).
-        let a = if self.n == 1 {
-            self.a_red.as_slice()
-        } else {
-            &[]
-        };
+        if self.n == 0 {
+            self.z.iter_mut().for_each(|v| *v = 0.0);
+            self.x[..form.nx].copy_from_slice(&self.xp);
+            return true;
+        }
+        // (Free internal forces have no curvature: along the line, σ is no multiple
+        // of y².)
+        if form.free > 0 {
+            return false;
+        }
+        // d = −(A N), the slacks' change along y.
+        let a = self.a_red.as_slice();
         let floor = &self.line_floor;
         let slope = |i: usize| match a.get(i) {
             Some(v) if v.abs() > floor[i] => -v,

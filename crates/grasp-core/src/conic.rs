@@ -515,6 +515,12 @@ impl ConicForm {
         let finite =
             basis_ok && all_finite(&b[..rows]) && all_finite(&xp[..nx]) && all_finite(&z[eq..rows]);
         let (dual, value) = (dual / zmax, value / vsize);
+        // With no free direction, x_p is the only point meeting the equalities: the ray
+        // has no horizon, and a value beyond the tolerance proves.
+        let margin = match &self.eq_null_t {
+            Some(nt) if nt.nrows() == 0 => 1.0,
+            _ => RAY_MARGIN,
+        };
         RayCheck {
             dual,
             stationarity,
@@ -524,7 +530,7 @@ impl ConicForm {
                 && dual <= tol
                 && stationarity <= tol
                 && particular <= tol
-                && value < -RAY_MARGIN * tol,
+                && value < -margin * tol,
         }
     }
 
@@ -691,12 +697,15 @@ pub struct RayCheck {
     /// How far `x_p` misses the equalities, each row against `|b_i| + ‖a_i‖₁ ‖x_p‖∞`.
     pub particular: f64,
     /// Whether `z` proves the problem infeasible: every measure within the tolerance
-    /// and `value` below −[`RAY_MARGIN`] times it.
+    /// and `value` below −[`RAY_MARGIN`] times it (below −tolerance where the equalities
+    /// leave no free direction: no torque but `x_p` meets them).
     pub passed: bool,
 }
 
 /// How far below zero, in multiples of the tolerance, a dual ray's relative value must
-/// be: clearly negative, not rounding.
+/// be where the equalities leave free directions: clearly negative, not rounding, for
+/// a ray proves only that no torque within |value| / stationarity of the problem's
+/// scale holds the grasp.
 pub const RAY_MARGIN: f64 = 1e3;
 
 /// Relative tolerance of the optimality certificate, [`ConicForm::certificate`] (each

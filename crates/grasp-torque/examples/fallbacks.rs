@@ -21,7 +21,8 @@
 //! instruction counts (valgrind). `… -- units SEED:FRICTION...` solves each grasp in
 //! SI units, in millimetres, in millinewtons, both ways and with the wrench scaled by
 //! 1e6 and 1e-6, and prints each status, method and σ's relative difference from the
-//! SI answer scaled.
+//! SI answer scaled. `… -- write SEED:FRICTION` prints the grasp as a matrix-form
+//! problem file (as in `fixtures/sweep`), for the command line.
 
 use grasp_testkit::sweep_grasp;
 use grasp_torque::{
@@ -195,9 +196,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 println!("{line}");
             }
         }
+        Some("write") => {
+            let [grasp] = &args[1..] else {
+                return Err("usage: fallbacks write SEED:FRICTION".into());
+            };
+            let (seed, friction) = grasp.split_once(':').unwrap_or_default();
+            let mut file = grasp_io::MatrixFile::from_problem(
+                &named_grasp(grasp)?,
+                Some(format!("sweep-{seed}-friction-{friction}")),
+            );
+            file.description = Some(format!(
+                "grasp_testkit::sweep_grasp({seed}, {friction}): a random grasp of the exact-cone robustness sweep (crates/grasp-torque/tests/exact.rs)"
+            ));
+            println!("{}", serde_json::to_string_pretty(&file)?);
+        }
         _ => {
             return Err(
-                "usage: fallbacks list | time SEED:FRICTION... | sweep FROM TO FRICTION [clarabel | sides=N] | ticks FROM TO FRICTION [CHANGE] | loop SEED:FRICTION N | units SEED:FRICTION..."
+                "usage: fallbacks list | time SEED:FRICTION... | sweep FROM TO FRICTION [clarabel | sides=N] | ticks FROM TO FRICTION [CHANGE] | loop SEED:FRICTION N | units SEED:FRICTION... | write SEED:FRICTION"
                     .into(),
             )
         }

@@ -902,3 +902,91 @@ fn warm_and_cold_solves_agree() {
         }
     }
 }
+
+/// Where the consistency equalities fix the torque (as many independent rows as joints:
+/// seed 992275 of the sweep, 10 joints, forces `[fz | fx fy fz mz | fz]` by a square G),
+/// that one point decides the grasp. Its slacks outside a cone or row are a ray of the
+/// dual: before, a point between the cones and the circumscribed polyhedra at N = 32
+/// went on to the interior-point method on the equalities' null space, which had no
+/// variable, and panicked (found by `scripts/sweep_vs_clarabel.sh 990000 993000 1`).
+/// Along the wrenches from one the contacts' normal forces hold to the seed's, the
+/// answer is optimal up to the boundary and infeasible by that ray beyond it, with
+/// nothing undecided between (a ray proves beyond the certificate's tolerance, where
+/// no free direction gives it a horizon); Clarabel agrees wherever it decides.
+#[test]
+fn a_torque_the_equalities_fix_is_decided_by_its_own_slacks() {
+    let p = grasp(992275, 1.0);
+    let decide = |t: f64| {
+        let mut q = p.clone();
+        // The contacts' unit normal forces, balanced by their wrench.
+        let mut f = vec![0.0; q.grasp_matrix.ncols()];
+        let mut at = 0;
+        for c in &q.contacts {
+            f[at + c.normal_index()] = 1.0;
+            at += c.dim();
+        }
+        let w_in = q.grasp_matrix.mul_vec(&f);
+        for (v, a) in q.wrench.iter_mut().zip(&w_in) {
+            *v = (1.0 - t) * a + t * *v;
+        }
+        (run(&q, Backend::ActiveSet, Cones::Exact), q)
+    };
+    let is_ray = |s: &Solution| {
+        s.status == Status::Infeasible
+            && s.method == Some("closed_form")
+            && matches!(s.reason, Some(Reason::DualRay { value, stationarity })
+                if value < -1e-9 && stationarity <= 1e-9)
+    };
+    let (start, _) = decide(0.0);
+    assert_eq!(start.status, Status::Optimal, "{:?}", start.reason);
+    let (end, _) = decide(1.0);
+    assert!(
+        is_ray(&end),
+        "{:?} {:?} {:?}",
+        end.status,
+        end.method,
+        end.reason
+    );
+    // The boundary, by bisection on the status.
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if decide(mid).0.status == Status::Optimal {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    // Just past it the miss is beyond the certificate's tolerance, and the ray proves
+    // it: no wrench is left undecided.
+    for k in (2..=12).rev() {
+        let t = hi * (1.0 + 10f64.powi(-k));
+        let (s, _) = decide(t);
+        assert!(
+            is_ray(&s),
+            "t = t*(1 + 1e-{k}): {:?} {:?}",
+            s.status,
+            s.reason
+        );
+    }
+    for i in 0..=20 {
+        let t = f64::from(i) / 20.0;
+        let (s, q) = decide(t);
+        if t < lo {
+            assert_eq!(s.status, Status::Optimal, "t = {t}: {:?}", s.reason);
+        } else {
+            assert!(is_ray(&s), "t = {t}: {:?} {:?}", s.status, s.reason);
+        }
+        #[cfg(feature = "clarabel")]
+        {
+            let c = run(&q, Backend::Clarabel, Cones::Exact);
+            if matches!(c.status, Status::Optimal | Status::Infeasible) {
+                assert_eq!(s.status, c.status, "t = {t}");
+            }
+            if c.status == Status::Optimal {
+                assert!(rel(s.objective, c.objective) <= 1e-7, "t = {t}");
+            }
+        }
+        let _ = q;
+    }
+}
