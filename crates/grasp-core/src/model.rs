@@ -302,11 +302,52 @@ type ActuatorRows = (Matrix, Matrix, Option<ActuatorSpace>, Vec<f64>);
 /// The decision rows `T⁺ Jᵀ`, the unactuated rows `Q₂ᵀ Jᵀ` and the joint space, or
 /// `Jᵀ` itself without a transmission (or with `T = I`); and the passive torques' targets
 /// of those rows, `[Q₂ᵀ τ_p; T⁺ τ_p]` (empty without passive torques).
+///
+/// A row at the rounding of its computation is made exactly zero: a joint that moves no
+/// contact (its axis through the contact, say) whose kinematics left `1e-16` in its row.
+/// Equilibrated, that rounding became a unit row: a torque that made forces at a gain of
+/// 1/ε, and consistency rows 1e17 apart, which no rank decision could read (an MJCF
+/// hand's actuator that moved its contacts by rounding alone, spatial-7 in
+/// fixtures/mjcf/oracle, broke the passive torques' offset and the backends'
+/// equalities). The rounding of row i of `M Jᵀ` is taken as [`ROUNDING_ROW`] ε times
+/// `Σ_k |M_ik|` times the largest row of Jᵀ (the convention the conic form's column
+/// scales use too), each row in the force metric (mz as mz/mu_torsion), so that it is
+/// the same in any units of force, torque or length (every row scales alike).
 fn actuator_space(p: &GraspProblem, rank_tolerance: f64) -> Result<ActuatorRows, ModelError> {
     let n = p.force_dim();
+    let mut unit = vec![1.0; n];
+    let mut off = 0;
+    for c in &p.contacts {
+        if let ContactModel::SfcLinear { mu_torsion, .. }
+        | ContactModel::SfcElliptic { mu_torsion, .. } = *c
+        {
+            unit[off + 3] = mu_torsion;
+        }
+        off += c.dim();
+    }
+    let size = |row: &[f64]| {
+        row.iter()
+            .zip(&unit)
+            .map(|(v, u)| (v * u).abs())
+            .fold(0.0f64, f64::max)
+    };
+    let jt = &p.jacobian_transpose;
+    let jscale = (0..jt.nrows())
+        .map(|i| size(jt.row(i)))
+        .fold(0.0f64, f64::max);
+    // Row i of `M Jᵀ` zeroed where it is rounding; `mix(i)` is `Σ_k |M_ik|`.
+    let flush = |mut rows: Matrix, mix: &dyn Fn(usize) -> f64| {
+        for i in 0..rows.nrows() {
+            let floor = ROUNDING_ROW * f64::EPSILON * mix(i) * jscale;
+            if size(rows.row(i)) <= floor {
+                rows.row_mut(i).iter_mut().for_each(|v| *v = 0.0);
+            }
+        }
+        rows
+    };
     let Some(t) = p.transmission.as_ref().filter(|t| !t.is_identity()) else {
         return Ok((
-            p.jacobian_transpose.clone(),
+            flush(jt.clone(), &|_| 1.0),
             Matrix::zeros(0, n),
             None,
             p.passive_torque.clone().unwrap_or_default(),
@@ -331,8 +372,9 @@ fn actuator_space(p: &GraspProblem, rank_tolerance: f64) -> Result<ActuatorRows,
             factors
         }
     };
-    let jt = tplus.matmul(&p.jacobian_transpose);
-    let unactuated = q2t.matmul(&p.jacobian_transpose);
+    let l1 = |m: &Matrix, i: usize| m.row(i).iter().map(|v| v.abs()).sum::<f64>();
+    let jt = flush(tplus.matmul(jt), &|i| l1(&tplus, i));
+    let unactuated = flush(q2t.matmul(&p.jacobian_transpose), &|i| l1(&q2t, i));
     let targets = match &p.passive_torque {
         Some(tp) => (0..q2t.nrows())
             .map(|i| dot(q2t.row(i), tp))
@@ -366,6 +408,10 @@ thread_local! {
     static T_FACTORS: std::cell::RefCell<crate::matrix::LastMatrix<(Matrix, Matrix)>> =
         std::cell::RefCell::new(crate::matrix::LastMatrix::default());
 }
+
+/// Multiples of ε, against the rows it combines, at or below which a row of `Jᵀ` (or of
+/// `T⁺ Jᵀ`, `Q₂ᵀ Jᵀ`) is rounding ([`actuator_space`]): kinematics leave 10–30 ε.
+const ROUNDING_ROW: f64 = 1e3;
 
 /// Largest ratio between the norms of two rows of `[G; Jᵀ]` for which `euclidean`
 /// keeps the plain A⁺: beyond it, its rounding grows with the ratio. Real hands in SI

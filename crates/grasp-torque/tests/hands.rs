@@ -131,13 +131,13 @@ fn the_aero_pinch_holds_against_its_springs() {
 /// forms, ends optimal or infeasible with the native
 /// solver, never in a failed check, and Clarabel agrees where it ends so. (A random
 /// hand with an unloaded finger whose joints shared actuators with loaded ones was
-/// refused by the joint-space check: its rows' own terms were rounding. On spatial-7's
-/// case 9 with gravity an actuator moves the contacts by rounding alone, the
-/// consistency rows' scales span 1e17, and the passive torques' offset, from a rank
-/// decision on the raw rows, missed three of five: the one point its equalities admit
-/// passed the exact cones' certificate, and failed the core's check by 12.5 N, as
-/// Clarabel's optimum did, where the grasp is infeasible. Each row is normalised
-/// before that decision now, and all three solvers prove it infeasible.)
+/// refused by the joint-space check: its rows' own terms were rounding.) The passive
+/// torques' offset `u_p` meets every consistency row. In 35 of these grasps a joint
+/// moves the contacts by rounding alone: equilibrated, its row of rounding spread the
+/// consistency rows' scales over 1e17, and `u_p` missed up to three rows in five, by
+/// their whole size (spatial-7's case 9 with gravity: the one point its equalities
+/// admit passed the exact cones' certificate and failed the core's check by 12.5 N, as
+/// Clarabel's optimum did, where the grasp is infeasible). Such rows are zero now.
 #[test]
 #[cfg(all(feature = "clarabel", feature = "active-set"))]
 fn spring_and_tendon_hands_end_optimal_or_infeasible() {
@@ -181,6 +181,25 @@ fn spring_and_tendon_hands_end_optimal_or_infeasible() {
                 .unwrap()
                 .problem;
             springs += usize::from(p.passive_torque.is_some());
+            // The passive torques' offset meets every consistency row, to rounding (the
+            // core's check allows 1e3 ε per dimension likewise).
+            let model = grasp_torque::GraspModel::new(&p, &Default::default()).unwrap();
+            let (c, up, ep) = (
+                &model.eq,
+                &model.passive.torque_offset,
+                &model.passive.eq_offset,
+            );
+            for i in 0..ep.len() {
+                let (mut v, mut size) = (-ep[i], ep[i].abs());
+                for (cij, u) in c.row(i).iter().zip(up) {
+                    v += cij * u;
+                    size += (cij * u).abs();
+                }
+                assert!(
+                    v.abs() <= 1e3 * f64::EPSILON * up.len() as f64 * size,
+                    "{label}: row {i} of C u_p − e_p is {v:e} (terms {size:e})"
+                );
+            }
             for cones in [Cones::Linear, Cones::Exact] {
                 let mut statuses = Vec::new();
                 for backend in [Backend::ActiveSet, Backend::Clarabel] {

@@ -252,6 +252,75 @@ fn passive_torques_match_a_direct_socp() {
     );
 }
 
+/// A joint that moves no contact but by rounding (a Jacobian row of 1e-16, as a model's
+/// kinematics leave an axis through the contact), with a passive torque on it that its
+/// actuator must cancel. Equilibrated, the rounding was a unit row: the joint's torque
+/// made forces at a gain of 1e16, the consistency rows' scales spanned as many orders,
+/// the native backend refused the model (dependent equalities) and Clarabel found its
+/// equalities inconsistent, where the direct SOCP solves the grasp. The row is zero
+/// now (`GraspModel`'s rounding rows), and both backends match the direct SOCP.
+#[test]
+fn a_joint_that_moves_no_contact_but_by_rounding_is_one_that_moves_none() {
+    let (mut compared, mut infeasible) = (0, 0);
+    for seed in 0..80u64 {
+        let Some(mut p) = grasp(seed) else { continue };
+        let mut rng = Rng(seed ^ 0x1d1e);
+        let (m, n) = (p.joints(), p.force_dim());
+        let lever = p.jacobian_transpose.max_abs();
+        let mut jt = Matrix::zeros(m + 1, n);
+        for i in 0..m {
+            jt.row_mut(i).copy_from_slice(p.jacobian_transpose.row(i));
+        }
+        for v in jt.row_mut(m) {
+            *v = 20.0 * f64::EPSILON * lever * rng.uniform(-1.0, 1.0);
+        }
+        p.jacobian_transpose = jt;
+        let tp = p.passive_torque.as_mut().unwrap();
+        let size = norm_inf(tp).max(1e-3);
+        tp.push(size * rng.uniform(0.2, 1.0));
+        if let Some(t) = &mut p.transmission {
+            let a = t.matrix.ncols();
+            let mut tm = Matrix::zeros(m + 1, a + 1);
+            for i in 0..m {
+                tm.row_mut(i)[..a].copy_from_slice(t.matrix.row(i));
+            }
+            tm[(m, a)] = 1.0;
+            t.matrix = tm;
+        }
+        (p.torque_weights, p.torque_limits, p.initial_torque) = (None, None, None);
+        p.joint_names.clear();
+        let want = direct(&p);
+        for backend in [Backend::ActiveSet, Backend::Clarabel] {
+            let s = run(&p, backend, Cones::Exact);
+            match &want {
+                Direct::Optimal(sigma, _) if s.status != Status::AlmostOptimal => {
+                    assert_eq!(
+                        s.status,
+                        Status::Optimal,
+                        "seed {seed} {backend:?}: {:?}",
+                        s.reason
+                    );
+                    assert!(
+                        rel(s.objective, *sigma) <= 1e-7,
+                        "seed {seed} {backend:?}: σ {} vs {sigma}",
+                        s.objective
+                    );
+                    compared += 1;
+                }
+                Direct::Infeasible => {
+                    assert_eq!(s.status, Status::Infeasible, "seed {seed} {backend:?}");
+                    infeasible += 1;
+                }
+                _ => {}
+            }
+        }
+    }
+    eprintln!(
+        "{compared} optimal answers against the direct SOCP, {infeasible} infeasible on both"
+    );
+    assert!(compared >= 40 && infeasible >= 2, "{compared} {infeasible}");
+}
+
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
 }
