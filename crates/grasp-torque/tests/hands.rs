@@ -181,19 +181,22 @@ fn spring_and_tendon_hands_end_optimal_or_infeasible() {
                 .unwrap()
                 .problem;
             springs += usize::from(p.passive_torque.is_some());
-            // The passive torques' offset meets every consistency row, to rounding (the
-            // core's check allows 1e3 ε per dimension likewise).
+            // The passive torques' offset meets every consistency row, to rounding: the
+            // normwise backward error of a solve, `‖C_i‖₁ ‖u_p‖∞ + |e_i|` (a tiny entry
+            // of u_p under a large one of C carries ε ‖u_p‖), with the core check's
+            // 1e3 ε per dimension.
             let model = grasp_torque::GraspModel::new(&p, &Default::default()).unwrap();
             let (c, up, ep) = (
                 &model.eq,
                 &model.passive.torque_offset,
                 &model.passive.eq_offset,
             );
+            let umax = up.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             for i in 0..ep.len() {
                 let (mut v, mut size) = (-ep[i], ep[i].abs());
                 for (cij, u) in c.row(i).iter().zip(up) {
                     v += cij * u;
-                    size += (cij * u).abs();
+                    size += cij.abs() * umax;
                 }
                 assert!(
                     v.abs() <= 1e3 * f64::EPSILON * up.len() as f64 * size,
