@@ -234,7 +234,7 @@ impl Passive {
 pub struct ActuatorSpace {
     /// T, m × a.
     pub transmission: Matrix,
-    /// Jᵀ in joint space, m × n.
+    /// Jᵀ in joint space, m × n, with its rows of rounding zero ([`actuator_space`]).
     pub joint_jacobian_transpose: Matrix,
     /// Joint names (empty when unknown).
     pub joint_names: Vec<String>,
@@ -345,9 +345,12 @@ fn actuator_space(p: &GraspProblem, rank_tolerance: f64) -> Result<ActuatorRows,
         }
         rows
     };
+    // Joint space first: the core's check of `Jᵀ f = T u + τ_p` reads these rows, and
+    // a row of rounding judged against its own size would fail on any force.
+    let joint_rows = flush(jt.clone(), &|_| 1.0);
     let Some(t) = p.transmission.as_ref().filter(|t| !t.is_identity()) else {
         return Ok((
-            flush(jt.clone(), &|_| 1.0),
+            joint_rows,
             Matrix::zeros(0, n),
             None,
             p.passive_torque.clone().unwrap_or_default(),
@@ -373,8 +376,8 @@ fn actuator_space(p: &GraspProblem, rank_tolerance: f64) -> Result<ActuatorRows,
         }
     };
     let l1 = |m: &Matrix, i: usize| m.row(i).iter().map(|v| v.abs()).sum::<f64>();
-    let jt = flush(tplus.matmul(jt), &|i| l1(&tplus, i));
-    let unactuated = flush(q2t.matmul(&p.jacobian_transpose), &|i| l1(&q2t, i));
+    let jt = flush(tplus.matmul(&joint_rows), &|i| l1(&tplus, i));
+    let unactuated = flush(q2t.matmul(&joint_rows), &|i| l1(&q2t, i));
     let targets = match &p.passive_torque {
         Some(tp) => (0..q2t.nrows())
             .map(|i| dot(q2t.row(i), tp))
@@ -387,12 +390,12 @@ fn actuator_space(p: &GraspProblem, rank_tolerance: f64) -> Result<ActuatorRows,
         unactuated,
         Some(ActuatorSpace {
             transmission: tm.clone(),
-            joint_jacobian_cols: column_major(m, n, |i, j| p.jacobian_transpose[(i, j)]),
+            joint_jacobian_cols: column_major(m, n, |i, j| joint_rows[(i, j)]),
             transmission_cols: column_major(m, a, |i, j| tm[(i, j)]),
             transmission_reach: (0..m)
                 .map(|i| tm.row(i).iter().map(|v| v.abs()).sum())
                 .collect(),
-            joint_jacobian_transpose: p.jacobian_transpose.clone(),
+            joint_jacobian_transpose: joint_rows,
             joint_names: p.joint_names.clone(),
             unactuated_directions: q2t,
             // Filled by the model, which knows the force units.

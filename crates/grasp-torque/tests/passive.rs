@@ -321,6 +321,90 @@ fn a_joint_that_moves_no_contact_but_by_rounding_is_one_that_moves_none() {
     assert!(compared >= 40 && infeasible >= 2, "{compared} {infeasible}");
 }
 
+/// The same joint of rounding, driven by no actuator: its equation `Jᵀ_j f = τ_p,j`
+/// says nothing about the forces, so the grasp is the one without that joint (where
+/// its row of rounding was a constraint on the forces, or, judged against its own size
+/// by the core's joint-space check, failed every answer); with a passive torque on it,
+/// nothing balances that torque and no wrench is reachable.
+#[test]
+fn an_unactuated_joint_that_moves_no_contact_adds_nothing_but_its_passive_torque() {
+    use grasp_torque::Reason;
+    let (mut compared, mut unreachable) = (0, 0);
+    for seed in 0..60u64 {
+        let Some(p) = grasp(seed) else { continue };
+        let mut rng = Rng(seed ^ 0x1d1f);
+        let (m, n) = (p.joints(), p.force_dim());
+        let mut q = p.clone();
+        let lever = p.jacobian_transpose.max_abs();
+        let mut jt = Matrix::zeros(m + 1, n);
+        for i in 0..m {
+            jt.row_mut(i).copy_from_slice(p.jacobian_transpose.row(i));
+        }
+        for v in jt.row_mut(m) {
+            *v = 20.0 * f64::EPSILON * lever * rng.uniform(-1.0, 1.0);
+        }
+        q.jacobian_transpose = jt;
+        // T: the problem's own (the identity without one), and a zero row.
+        let t = p
+            .transmission
+            .as_ref()
+            .map_or_else(|| Matrix::identity(m), |t| t.matrix.clone());
+        let mut tm = Matrix::zeros(m + 1, t.ncols());
+        for i in 0..m {
+            tm.row_mut(i).copy_from_slice(t.row(i));
+        }
+        q.transmission = Some(Transmission {
+            matrix: tm,
+            actuator_names: vec![],
+        });
+        q.passive_torque.as_mut().unwrap().push(0.0);
+        q.joint_names.clear();
+        for backend in [Backend::ActiveSet, Backend::Clarabel] {
+            for cones in [Cones::Linear, Cones::Exact] {
+                let (a, b) = (run(&p, backend, cones), run(&q, backend, cones));
+                if a.status == Status::AlmostOptimal || b.status == Status::AlmostOptimal {
+                    continue;
+                }
+                assert_eq!(
+                    a.status, b.status,
+                    "seed {seed} {backend:?} {cones:?}: {:?}",
+                    b.reason
+                );
+                if a.status == Status::Optimal {
+                    assert!(
+                        rel(a.objective, b.objective) <= 1e-9,
+                        "seed {seed} {backend:?} {cones:?}: σ {} vs {}",
+                        b.objective,
+                        a.objective
+                    );
+                    compared += 1;
+                }
+            }
+        }
+        *q.passive_torque.as_mut().unwrap().last_mut().unwrap() = rng.uniform(0.1, 1.0);
+        for backend in [Backend::ActiveSet, Backend::Clarabel] {
+            let s = run(&q, backend, Cones::Exact);
+            assert_eq!(s.status, Status::Infeasible, "seed {seed} {backend:?}");
+            // (Named as the unactuated joint's, with a transmission.)
+            let cause = match &s.reason {
+                Some(Reason::Underactuated { cause, .. }) => Some(&**cause),
+                r => r.as_ref(),
+            };
+            assert!(
+                matches!(cause, Some(Reason::UnreachableWrench { .. })),
+                "seed {seed} {backend:?}: {:?}",
+                s.reason
+            );
+            unreachable += 1;
+        }
+    }
+    eprintln!("{compared} optimal answers as without the joint, {unreachable} unreachable with a passive torque on it");
+    assert!(
+        compared >= 60 && unreachable >= 60,
+        "{compared} {unreachable}"
+    );
+}
+
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
 }
