@@ -303,46 +303,24 @@ type ActuatorRows = (Matrix, Matrix, Option<ActuatorSpace>, Vec<f64>);
 /// `Jᵀ` itself without a transmission (or with `T = I`); and the passive torques' targets
 /// of those rows, `[Q₂ᵀ τ_p; T⁺ τ_p]` (empty without passive torques).
 ///
-/// A row at the rounding of its computation is made exactly zero: a joint that moves no
-/// contact (its axis through the contact, say) whose kinematics left `1e-16` in its row.
-/// Equilibrated, that rounding became a unit row: a torque that made forces at a gain of
-/// 1/ε, and consistency rows 1e17 apart, which no rank decision could read (an MJCF
-/// hand's actuator that moved its contacts by rounding alone, spatial-7 in
-/// fixtures/mjcf/oracle, broke the passive torques' offset and the backends'
-/// equalities). The rounding of row i of `M Jᵀ` is taken as [`ROUNDING_ROW`] ε times
-/// `Σ_k |M_ik|` times the largest row of Jᵀ (the convention the conic form's column
-/// scales use too), each row in the force metric (mz as mz/mu_torsion), so that it is
-/// the same in any units of force, torque or length (every row scales alike).
-fn actuator_space(p: &GraspProblem, rank_tolerance: f64) -> Result<ActuatorRows, ModelError> {
+/// A row that the rank decision would drop in its block's own scale is made exactly
+/// zero ([`flush_rows`]): a joint that moves no contact (its axis through the contact,
+/// say) whose kinematics left `1e-16` in its row. Row i of `M Jᵀ` is judged against
+/// `Σ_k |M_ik|` times what the joints do with each contact.
+fn actuator_space(
+    p: &GraspProblem,
+    unit: &[f64],
+    cols: &[std::ops::Range<usize>],
+    rank_tolerance: f64,
+) -> Result<ActuatorRows, ModelError> {
     let n = p.force_dim();
-    let mut unit = vec![1.0; n];
-    let mut off = 0;
-    for c in &p.contacts {
-        if let ContactModel::SfcLinear { mu_torsion, .. }
-        | ContactModel::SfcElliptic { mu_torsion, .. } = *c
-        {
-            unit[off + 3] = mu_torsion;
-        }
-        off += c.dim();
-    }
-    let size = |row: &[f64]| {
-        row.iter()
-            .zip(&unit)
-            .map(|(v, u)| (v * u).abs())
-            .fold(0.0f64, f64::max)
-    };
     let jt = &p.jacobian_transpose;
-    let jscale = (0..jt.nrows())
-        .map(|i| size(jt.row(i)))
-        .fold(0.0f64, f64::max);
-    // Row i of `M Jᵀ` zeroed where it is rounding; `mix(i)` is `Σ_k |M_ik|`.
+    let scale = contact_scales(jt, 0..jt.nrows(), unit, cols);
     let flush = |mut rows: Matrix, mix: &dyn Fn(usize) -> f64| {
-        for i in 0..rows.nrows() {
-            let floor = ROUNDING_ROW * f64::EPSILON * mix(i) * jscale;
-            if size(rows.row(i)) <= floor {
-                rows.row_mut(i).iter_mut().for_each(|v| *v = 0.0);
-            }
-        }
+        let all = 0..rows.nrows();
+        flush_rows(&mut rows, all, unit, cols, &scale, |i| {
+            rank_tolerance * mix(i)
+        });
         rows
     };
     // Joint space first: the core's check of `Jᵀ f = T u + τ_p` reads these rows, and
@@ -412,9 +390,68 @@ thread_local! {
         std::cell::RefCell::new(crate::matrix::LastMatrix::default());
 }
 
-/// Multiples of ε, against the rows it combines, at or below which a row of `Jᵀ` (or of
-/// `T⁺ Jᵀ`, `Q₂ᵀ Jᵀ`) is rounding ([`actuator_space`]): kinematics leave 10–30 ε.
-const ROUNDING_ROW: f64 = 1e3;
+/// Per contact (its columns `cols[c]`), the largest entry of `m`'s `rows` there, in the
+/// force metric (mz as mz/mu_torsion, so that a moment row's entries are all lengths):
+/// the scale of what that block of rows does with that contact's force.
+fn contact_scales(
+    m: &Matrix,
+    rows: std::ops::Range<usize>,
+    unit: &[f64],
+    cols: &[std::ops::Range<usize>],
+) -> Vec<f64> {
+    cols.iter()
+        .map(|c| {
+            rows.clone()
+                .flat_map(|i| m.row(i)[c.clone()].iter().zip(&unit[c.clone()]))
+                .fold(0.0f64, |a, (v, u)| a.max((v * u).abs()))
+        })
+        .collect()
+}
+
+/// Whether row i of `m` does nothing with any contact's force beyond `t` times what its
+/// block does with it (`scale`, [`contact_scales`]), and is not zero already: a row
+/// that the rank decision would drop, contact by contact, in the block's own scale.
+/// Equilibrated, such a row (rounding, or a lever 1e-12 of the others) became a unit
+/// row, a constraint as strong as any: a joint that moves no contact made forces at a
+/// gain of 1/ε, with consistency rows 1e17 apart (an MJCF hand, spatial-7 in
+/// fixtures/mjcf/oracle), and a pinch whose contact sat an attometre off the line
+/// through the other and the object's origin could not hold its object. Judged per
+/// contact, a row stays that matters for one contact though another, far away, has
+/// levers 1e11 times larger. A block's rows scale alike in any unit of force, torque or
+/// length, so the decision is unit-free.
+fn negligible(
+    m: &Matrix,
+    i: usize,
+    unit: &[f64],
+    cols: &[std::ops::Range<usize>],
+    scale: &[f64],
+    t: f64,
+) -> bool {
+    let row = m.row(i);
+    row.iter().any(|&v| v != 0.0)
+        && cols.iter().zip(scale).all(|(c, &s)| {
+            row[c.clone()]
+                .iter()
+                .zip(&unit[c.clone()])
+                .all(|(v, u)| (v * u).abs() <= t * s)
+        })
+}
+
+/// Zeroes the [`negligible`] rows among `rows`, with `t = tol(i)`.
+fn flush_rows(
+    m: &mut Matrix,
+    rows: std::ops::Range<usize>,
+    unit: &[f64],
+    cols: &[std::ops::Range<usize>],
+    scale: &[f64],
+    tol: impl Fn(usize) -> f64,
+) {
+    for i in rows {
+        if negligible(m, i, unit, cols, scale, tol(i)) {
+            m.row_mut(i).iter_mut().for_each(|v| *v = 0.0);
+        }
+    }
+}
 
 /// Largest ratio between the norms of two rows of `[G; Jᵀ]` for which `euclidean`
 /// keeps the plain A⁺: beyond it, its rounding grows with the ratio. Real hands in SI
@@ -428,20 +465,6 @@ impl GraspModel {
             return Err(ModelError::RankTolerance(opts.rank_tolerance));
         }
         let n = p.force_dim();
-        let (jt, unactuated, mut actuators, row_targets) = actuator_space(p, opts.rank_tolerance)?;
-        let (k, m) = (unactuated.nrows(), jt.nrows());
-        // Row i of A = [G; E; Jᵀ] (E: the unactuated directions, target 0), without
-        // stacking a copy.
-        let a_row = |i: usize| {
-            if i < 6 {
-                p.grasp_matrix.row(i)
-            } else if i < 6 + k {
-                unactuated.row(i - 6)
-            } else {
-                jt.row(i - 6 - k)
-            }
-        };
-        let rows = 6 + k + m;
         // Column metric D: mz counts as mz/mu_torsion in the compliance metric.
         let mut force_unit = vec![1.0; n];
         let mut offsets = Vec::with_capacity(p.contacts.len());
@@ -455,6 +478,39 @@ impl GraspModel {
             }
             off += c.dim();
         }
+        let cols: Vec<_> = offsets
+            .iter()
+            .zip(&p.contacts)
+            .map(|(&o, c)| o..o + c.dim())
+            .collect();
+        let (jt, unactuated, mut actuators, row_targets) =
+            actuator_space(p, &force_unit, &cols, opts.rank_tolerance)?;
+        let (k, m) = (unactuated.nrows(), jt.nrows());
+        // G's force rows and its moment rows, each block likewise.
+        let g = &p.grasp_matrix;
+        let scales = [0..3, 3..6].map(|b| contact_scales(g, b, &force_unit, &cols));
+        let tol = opts.rank_tolerance;
+        let grasp = if (0..6).any(|i| negligible(g, i, &force_unit, &cols, &scales[i / 3], tol)) {
+            let mut g = g.clone();
+            for (b, scale) in [0..3, 3..6].into_iter().zip(&scales) {
+                flush_rows(&mut g, b, &force_unit, &cols, scale, |_| tol);
+            }
+            std::borrow::Cow::Owned(g)
+        } else {
+            std::borrow::Cow::Borrowed(g)
+        };
+        // Row i of A = [G; E; Jᵀ] (E: the unactuated directions, target 0), without
+        // stacking a copy.
+        let a_row = |i: usize| {
+            if i < 6 {
+                grasp.row(i)
+            } else if i < 6 + k {
+                unactuated.row(i - 6)
+            } else {
+                jt.row(i - 6 - k)
+            }
+        };
+        let rows = 6 + k + m;
         let dinv = if p.internal_forces == InternalForces::Compliance {
             force_unit.clone()
         } else {
@@ -474,16 +530,31 @@ impl GraspModel {
             }
             row_norms.push(crate::matrix::norm2(&scaled));
         }
+        // A zero row's target (a wrench component no contact can apply, a torque no
+        // contact resists) is scaled as its block's rows are: the unreachable check then
+        // reads it in their units.
+        let block_of = |i: usize| match i {
+            0..3 => 0,
+            3..6 => 1,
+            _ if i < 6 + k => 2,
+            _ => 3,
+        };
+        let mut block_max = [0.0f64; 4];
+        for (i, &nrm) in row_norms.iter().enumerate() {
+            block_max[block_of(i)] = block_max[block_of(i)].max(nrm);
+        }
         let decomposed = |equilibrate: bool| {
             let r: Vec<f64> = row_norms
                 .iter()
-                .map(|&nrm| {
-                    if equilibrate && nrm > 0.0 {
-                        1.0 / nrm
-                    } else {
-                        1.0
-                    }
-                })
+                .enumerate()
+                .map(
+                    |(i, &nrm)| match (equilibrate, nrm > 0.0, block_max[block_of(i)]) {
+                        (false, ..) => 1.0,
+                        (true, true, _) => 1.0 / nrm,
+                        (true, false, b) if b > 0.0 => 1.0 / b,
+                        _ => 1.0,
+                    },
+                )
                 .collect();
             // R A D⁻¹.
             let mut data = Vec::with_capacity(rows * n);

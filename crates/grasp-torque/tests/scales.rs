@@ -68,3 +68,74 @@ fn every_backend_agrees_at_every_scale() {
     }
     assert_eq!(checked, expected);
 }
+
+/// A row of G or Jᵀ that the rank decision would drop in its block's own scale is zero
+/// (`GraspModel`'s `flush_rows`): the geometry fixture's pinch with its first contact
+/// moved off the line through the other and the object's origin, by an attometre to
+/// 3e-11 of the grasp's size, is the pinch itself, in metres, millimetres and
+/// kilometres, on every backend. Before, the moment row about that line (`y f_z`) was
+/// equilibrated into a unit row, the constraint `f_z = 0` on the first contact, and the
+/// pinch could hold nothing at any offset. Beyond the rank tolerance (3e-8 of its size)
+/// the offset is a lever, and the grasp what that lever makes of it: infeasible.
+#[test]
+fn a_lever_the_rank_tolerance_drops_is_no_lever() {
+    let path = format!(
+        "{}/../../fixtures/geometry/pinch.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(path).unwrap();
+    let pinch = |y: f64| {
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        v["contacts"][0]["position"][1] = y.into();
+        grasp_torque::parse_problem(&v.to_string()).unwrap()
+    };
+    let runs = [
+        (Backend::ActiveSet, Cones::Linear, 1e-9),
+        (Backend::ActiveSet, Cones::Exact, 2e-9),
+        (Backend::Clarabel, Cones::Exact, 1e-6),
+    ];
+    for l in [1.0, 1e3, 1e-3] {
+        let on_line = rescale(&pinch(0.0), l, 1.0);
+        for y in [1e-18, 1e-15, 1e-12] {
+            let off = rescale(&pinch(y), l, 1.0);
+            for (backend, cones, tol) in runs {
+                let (a, b) = (run(&on_line, backend, cones), run(&off, backend, cones));
+                assert!(
+                    a.is_optimal() && b.is_optimal(),
+                    "y {y} l {l} {backend:?} {cones:?}: {:?}",
+                    b.reason
+                );
+                let r = (a.objective - b.objective).abs() / a.objective;
+                assert!(
+                    r <= tol,
+                    "y {y} l {l} {backend:?} {cones:?}: σ {} vs {}",
+                    b.objective,
+                    a.objective
+                );
+            }
+        }
+        let lever = rescale(&pinch(1e-9), l, 1.0);
+        for (backend, cones, _) in runs {
+            let s = run(&lever, backend, cones);
+            assert_eq!(
+                s.status,
+                grasp_torque::Status::Infeasible,
+                "l {l} {backend:?} {cones:?}"
+            );
+        }
+    }
+    // Judged contact by contact: with the Allegro pinch's thumb contact a million
+    // kilometres up (levers 1e11 times the others'), the moment about the vertical,
+    // which that contact's force hardly makes, is still the other contacts'.
+    let dir = format!("{}/../../fixtures/hands", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(format!("{dir}/allegro-pinch.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["contacts"][2]["position"][2] = 1e9.into();
+    let p = grasp_torque::parse_problem_at(&v.to_string(), std::path::Path::new(&dir))
+        .unwrap()
+        .problem;
+    let model = grasp_torque::GraspModel::new(&p, &Default::default()).unwrap();
+    for i in 0..6 {
+        assert_eq!(model.stacked_row(i), p.grasp_matrix.row(i), "row {i} of G");
+    }
+}
