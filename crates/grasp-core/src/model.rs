@@ -315,12 +315,11 @@ fn actuator_space(
 ) -> Result<ActuatorRows, ModelError> {
     let n = p.force_dim();
     let jt = &p.jacobian_transpose;
-    let scale = contact_scales(jt, 0..jt.nrows(), unit, cols);
+    let mut scale = vec![0.0; n];
+    contact_scales(jt, 0..jt.nrows(), unit, cols, &mut scale);
     let flush = |mut rows: Matrix, mix: &dyn Fn(usize) -> f64| {
         let all = 0..rows.nrows();
-        flush_rows(&mut rows, all, unit, cols, &scale, |i| {
-            rank_tolerance * mix(i)
-        });
+        flush_rows(&mut rows, all, unit, &scale, |i| rank_tolerance * mix(i));
         rows
     };
     // Joint space first: the core's check of `Jᵀ f = T u + τ_p` reads these rows, and
@@ -390,51 +389,53 @@ thread_local! {
         std::cell::RefCell::new(crate::matrix::LastMatrix::default());
 }
 
-/// Per contact (its columns `cols[c]`), the largest entry of `m`'s `rows` there, in the
-/// force metric (mz as mz/mu_torsion, so that a moment row's entries are all lengths):
-/// the scale of what that block of rows does with that contact's force.
+/// Per column, the largest entry of `m`'s `rows` on its contact's columns (`cols`), in
+/// the force metric (mz as mz/mu_torsion, so that a moment row's entries are all
+/// lengths): the scale of what that block of rows does with that contact's force.
 fn contact_scales(
     m: &Matrix,
     rows: std::ops::Range<usize>,
     unit: &[f64],
     cols: &[std::ops::Range<usize>],
-) -> Vec<f64> {
-    cols.iter()
-        .map(|c| {
-            rows.clone()
-                .flat_map(|i| m.row(i)[c.clone()].iter().zip(&unit[c.clone()]))
-                .fold(0.0f64, |a, (v, u)| a.max((v * u).abs()))
-        })
-        .collect()
+    out: &mut [f64],
+) {
+    out.fill(0.0);
+    for i in rows {
+        for ((s, v), u) in out.iter_mut().zip(m.row(i)).zip(unit) {
+            let a = (v * u).abs();
+            if a > *s {
+                *s = a;
+            }
+        }
+    }
+    for c in cols {
+        let block = &mut out[c.clone()];
+        let top = block.iter().fold(0.0f64, |a, &v| if v > a { v } else { a });
+        block.fill(top);
+    }
 }
 
 /// Whether row i of `m` does nothing with any contact's force beyond `t` times what its
-/// block does with it (`scale`, [`contact_scales`]), and is not zero already: a row
-/// that the rank decision would drop, contact by contact, in the block's own scale.
-/// Equilibrated, such a row (rounding, or a lever 1e-12 of the others) became a unit
-/// row, a constraint as strong as any: a joint that moves no contact made forces at a
-/// gain of 1/ε, with consistency rows 1e17 apart (an MJCF hand, spatial-7 in
-/// fixtures/mjcf/oracle), and a pinch whose contact sat an attometre off the line
-/// through the other and the object's origin could not hold its object. Judged per
-/// contact, a row stays that matters for one contact though another, far away, has
-/// levers 1e11 times larger. A block's rows scale alike in any unit of force, torque or
-/// length, so the decision is unit-free.
-fn negligible(
-    m: &Matrix,
-    i: usize,
-    unit: &[f64],
-    cols: &[std::ops::Range<usize>],
-    scale: &[f64],
-    t: f64,
-) -> bool {
-    let row = m.row(i);
-    row.iter().any(|&v| v != 0.0)
-        && cols.iter().zip(scale).all(|(c, &s)| {
-            row[c.clone()]
-                .iter()
-                .zip(&unit[c.clone()])
-                .all(|(v, u)| (v * u).abs() <= t * s)
-        })
+/// block does with it (`scale`, per column, [`contact_scales`]), and is not zero
+/// already: a row that the rank decision would drop, contact by contact, in the
+/// block's own scale. Equilibrated, such a row (rounding, or a lever 1e-12 of the
+/// others) became a unit row, a constraint as strong as any: a joint that moves no
+/// contact made forces at a gain of 1/ε, with consistency rows 1e17 apart (an MJCF
+/// hand, spatial-7 in fixtures/mjcf/oracle), and a pinch whose contact sat an
+/// attometre off the line through the other and the object's origin could not hold
+/// its object. Judged per contact, a row stays that matters for one contact though
+/// another, far away, has levers 1e11 times larger. A block's rows scale alike in any
+/// unit of force, torque or length, so the decision is unit-free.
+fn negligible(m: &Matrix, i: usize, unit: &[f64], scale: &[f64], t: f64) -> bool {
+    let mut nonzero = false;
+    for ((v, u), s) in m.row(i).iter().zip(unit).zip(scale) {
+        let a = (v * u).abs();
+        if a > t * s {
+            return false;
+        }
+        nonzero |= a != 0.0;
+    }
+    nonzero
 }
 
 /// Zeroes the [`negligible`] rows among `rows`, with `t = tol(i)`.
@@ -442,12 +443,11 @@ fn flush_rows(
     m: &mut Matrix,
     rows: std::ops::Range<usize>,
     unit: &[f64],
-    cols: &[std::ops::Range<usize>],
     scale: &[f64],
     tol: impl Fn(usize) -> f64,
 ) {
     for i in rows {
-        if negligible(m, i, unit, cols, scale, tol(i)) {
+        if negligible(m, i, unit, scale, tol(i)) {
             m.row_mut(i).iter_mut().for_each(|v| *v = 0.0);
         }
     }
@@ -488,12 +488,16 @@ impl GraspModel {
         let (k, m) = (unactuated.nrows(), jt.nrows());
         // G's force rows and its moment rows, each block likewise.
         let g = &p.grasp_matrix;
-        let scales = [0..3, 3..6].map(|b| contact_scales(g, b, &force_unit, &cols));
+        let mut scales = vec![0.0; 2 * n];
+        let (fs, ms) = scales.split_at_mut(n);
+        contact_scales(g, 0..3, &force_unit, &cols, fs);
+        contact_scales(g, 3..6, &force_unit, &cols, ms);
+        let scale = |i: usize| &scales[i / 3 * n..(i / 3 + 1) * n];
         let tol = opts.rank_tolerance;
-        let grasp = if (0..6).any(|i| negligible(g, i, &force_unit, &cols, &scales[i / 3], tol)) {
+        let grasp = if (0..6).any(|i| negligible(g, i, &force_unit, scale(i), tol)) {
             let mut g = g.clone();
-            for (b, scale) in [0..3, 3..6].into_iter().zip(&scales) {
-                flush_rows(&mut g, b, &force_unit, &cols, scale, |_| tol);
+            for b in [0..3, 3..6] {
+                flush_rows(&mut g, b.clone(), &force_unit, scale(b.start), |_| tol);
             }
             std::borrow::Cow::Owned(g)
         } else {
