@@ -263,18 +263,10 @@ fn passive_torques_match_a_direct_socp() {
 fn a_joint_that_moves_no_contact_but_by_rounding_is_one_that_moves_none() {
     let (mut compared, mut infeasible) = (0, 0);
     for seed in 0..80u64 {
-        let Some(mut p) = grasp(seed) else { continue };
+        let Some(p) = grasp(seed) else { continue };
         let mut rng = Rng(seed ^ 0x1d1e);
-        let (m, n) = (p.joints(), p.force_dim());
-        let lever = p.jacobian_transpose.max_abs();
-        let mut jt = Matrix::zeros(m + 1, n);
-        for i in 0..m {
-            jt.row_mut(i).copy_from_slice(p.jacobian_transpose.row(i));
-        }
-        for v in jt.row_mut(m) {
-            *v = 20.0 * f64::EPSILON * lever * rng.uniform(-1.0, 1.0);
-        }
-        p.jacobian_transpose = jt;
+        let m = p.joints();
+        let mut p = with_a_joint_of_rounding(&p, &mut rng);
         let tp = p.passive_torque.as_mut().unwrap();
         let size = norm_inf(tp).max(1e-3);
         tp.push(size * rng.uniform(0.2, 1.0));
@@ -288,7 +280,6 @@ fn a_joint_that_moves_no_contact_but_by_rounding_is_one_that_moves_none() {
             t.matrix = tm;
         }
         (p.torque_weights, p.torque_limits, p.initial_torque) = (None, None, None);
-        p.joint_names.clear();
         let want = direct(&p);
         for backend in [Backend::ActiveSet, Backend::Clarabel] {
             let s = run(&p, backend, Cones::Exact);
@@ -333,17 +324,8 @@ fn an_unactuated_joint_that_moves_no_contact_adds_nothing_but_its_passive_torque
     for seed in 0..60u64 {
         let Some(p) = grasp(seed) else { continue };
         let mut rng = Rng(seed ^ 0x1d1f);
-        let (m, n) = (p.joints(), p.force_dim());
-        let mut q = p.clone();
-        let lever = p.jacobian_transpose.max_abs();
-        let mut jt = Matrix::zeros(m + 1, n);
-        for i in 0..m {
-            jt.row_mut(i).copy_from_slice(p.jacobian_transpose.row(i));
-        }
-        for v in jt.row_mut(m) {
-            *v = 20.0 * f64::EPSILON * lever * rng.uniform(-1.0, 1.0);
-        }
-        q.jacobian_transpose = jt;
+        let m = p.joints();
+        let mut q = with_a_joint_of_rounding(&p, &mut rng);
         // T: the problem's own (the identity without one), and a zero row.
         let t = p
             .transmission
@@ -358,7 +340,6 @@ fn an_unactuated_joint_that_moves_no_contact_adds_nothing_but_its_passive_torque
             actuator_names: vec![],
         });
         q.passive_torque.as_mut().unwrap().push(0.0);
-        q.joint_names.clear();
         for backend in [Backend::ActiveSet, Backend::Clarabel] {
             for cones in [Cones::Linear, Cones::Exact] {
                 let (a, b) = (run(&p, backend, cones), run(&q, backend, cones));
@@ -403,6 +384,24 @@ fn an_unactuated_joint_that_moves_no_contact_adds_nothing_but_its_passive_torque
         compared >= 60 && unreachable >= 60,
         "{compared} {unreachable}"
     );
+}
+
+/// `p` with one more joint, last, whose row of Jᵀ is rounding (20 ε of the largest
+/// entry, random signs): a joint that moves no contact, as kinematics leave it.
+fn with_a_joint_of_rounding(p: &GraspProblem, rng: &mut Rng) -> GraspProblem {
+    let (m, n) = (p.joints(), p.force_dim());
+    let lever = p.jacobian_transpose.max_abs();
+    let mut jt = Matrix::zeros(m + 1, n);
+    for i in 0..m {
+        jt.row_mut(i).copy_from_slice(p.jacobian_transpose.row(i));
+    }
+    for v in jt.row_mut(m) {
+        *v = 20.0 * f64::EPSILON * lever * rng.uniform(-1.0, 1.0);
+    }
+    let mut q = p.clone();
+    q.jacobian_transpose = jt;
+    q.joint_names.clear();
+    q
 }
 
 fn rel(a: f64, b: f64) -> f64 {
