@@ -234,7 +234,8 @@ impl Passive {
 pub struct ActuatorSpace {
     /// T, m × a.
     pub transmission: Matrix,
-    /// Jᵀ in joint space, m × n, with its rows of rounding zero ([`actuator_space`]).
+    /// Jᵀ in joint space, m × n, with its negligible rows zero (rows that the rank
+    /// decision would drop, contact by contact, in Jᵀ's own scale).
     pub joint_jacobian_transpose: Matrix,
     /// Joint names (empty when unknown).
     pub joint_names: Vec<String>,
