@@ -717,10 +717,10 @@ impl GraspModel {
                 let eq_offset: Vec<f64> = eq_passive.iter().map(|v| -v).collect();
                 // u_p = D⁻¹ (C D⁻¹)⁺ e_p with D = diag(√w): the least Σ w_j u_j². Each
                 // row (with its e_p) is normalised first: the rows are independent, but
-                // their scales span as many orders as the equilibration's (an actuator
-                // that moves no contact has a row of rounding, scaled up), and a
-                // relative rank decision on the raw rows dropped the small ones, so
-                // that u_p missed them.
+                // their scales span as many orders as the equilibration's (a joint with
+                // a lever far below the others', scaled up: 1e6 apart on a random MJCF
+                // hand), and a relative rank decision on the raw rows dropped the small
+                // ones, so that u_p missed them.
                 let mut torque_offset = vec![0.0; m];
                 if eq.nrows() > 0 {
                     let dinv_w: Vec<f64> = weights.iter().map(|w| 1.0 / w.sqrt()).collect();
