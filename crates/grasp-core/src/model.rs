@@ -95,7 +95,9 @@ pub struct ModelOptions {
     pub equilibrium: Equilibrium,
     /// Relative rank tolerance for the pseudo-inverse and the consistency rows: singular
     /// values at or below `rank_tolerance · σ_max` of the row-equilibrated matrix count
-    /// as zero. Default `1e-9`, as in the reference implementation
+    /// as zero, and so does a row of G or Jᵀ whose entries on every contact are at most
+    /// `rank_tolerance` times the largest of its block's there (equilibration would
+    /// make a unit row of it). Default `1e-9`, as in the reference implementation
     /// (`shared/reference/README.md`, item 1).
     pub rank_tolerance: f64,
 }
