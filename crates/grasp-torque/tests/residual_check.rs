@@ -120,3 +120,48 @@ fn residuals_match_a_plain_recomputation_and_a_moved_answer_fails() {
     }
     assert!(failed >= 5, "only {failed} moved answers checked");
 }
+
+/// A moment no contact can make is not admitted by a tiny lever in the same block of
+/// rows: sweep seed 1720 at normal friction, five point contacts whose moment rows of G
+/// are 0, 6.8e-21 and 0 (their forces pass through the object's origin), and a wrench
+/// with moments of 2 N·m. Equilibrated up by 1.5e20, the tiny row raised the unreachable
+/// check's tolerance, read in raw units on the zero rows, above those moments, and the
+/// answer was `optimal` with σ = 2.3e40 and `‖G f − w‖∞` = 3.9e7. A zero row's target is
+/// now scaled as its block's rows are: the wrench is unreachable, on every backend and
+/// cone, and in millimetres too.
+#[test]
+fn a_moment_no_contact_makes_is_unreachable() {
+    use grasp_torque::{Backend, Cones, Reason};
+    let p = grasp_testkit::sweep_grasp(1720, 1.0);
+    let mut backends = vec![Backend::ActiveSet];
+    if cfg!(feature = "clarabel") {
+        backends.push(Backend::Clarabel);
+    }
+    for q in [p.clone(), grasp_testkit::rescale(&p, 1e3, 1.0)] {
+        for &backend in &backends {
+            for cones in [Cones::Linear, Cones::Exact] {
+                let config = SolverConfig {
+                    backend: Some(backend),
+                    cones,
+                    ..Default::default()
+                };
+                let s = GraspSolver::new(&q, &config)
+                    .unwrap()
+                    .solve(&q.wrench, &WarmStart::default())
+                    .unwrap()
+                    .clone();
+                assert_eq!(
+                    s.status,
+                    Status::Infeasible,
+                    "{backend:?} {cones:?}: σ {}",
+                    s.objective
+                );
+                assert!(
+                    matches!(s.reason, Some(Reason::UnreachableWrench { .. })),
+                    "{backend:?} {cones:?}: {:?}",
+                    s.reason
+                );
+            }
+        }
+    }
+}
