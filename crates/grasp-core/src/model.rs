@@ -720,9 +720,9 @@ impl GraspModel {
                 // u_p = D⁻¹ (C D⁻¹)⁺ e_p with D = diag(√w): the least Σ w_j u_j². Each
                 // row (with its e_p) is normalised first: the rows are independent, but
                 // their scales span as many orders as the equilibration's (a joint with
-                // a lever far below the others', scaled up: 1e6 apart on a random MJCF
-                // hand), and a relative rank decision on the raw rows dropped the small
-                // ones, so that u_p missed them.
+                // a lever far below the others', scaled up: 1e6 apart on spatial-4's
+                // case 4 in fixtures/mjcf/oracle), and a relative rank decision on the
+                // raw rows dropped the small ones, so that u_p missed them.
                 let mut torque_offset = vec![0.0; m];
                 if eq.nrows() > 0 {
                     let dinv_w: Vec<f64> = weights.iter().map(|w| 1.0 / w.sqrt()).collect();

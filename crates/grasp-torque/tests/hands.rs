@@ -132,10 +132,10 @@ fn the_aero_pinch_holds_against_its_springs() {
 /// solver, never in a failed check, and Clarabel agrees where it ends so. (A random
 /// hand with an unloaded finger whose joints shared actuators with loaded ones was
 /// refused by the joint-space check: its rows' own terms were rounding.) The passive
-/// torques' offset `u_p` meets every consistency row. In 35 of these problems a joint
-/// moved the contacts by rounding alone: equilibrated, its row of rounding spread the
-/// consistency rows' scales over more than 1e12, and `u_p` missed up to three rows in five, by
-/// their whole size (spatial-7's case 9 with gravity: the one point its equalities
+/// torques' offset `u_p` meets every consistency row. Where a joint moved the contacts
+/// by rounding alone, its row of rounding, equilibrated, spread the consistency rows'
+/// scales over many orders, and `u_p` missed up to three rows in five, by their whole
+/// size (spatial-7's case 9 with gravity: the one point its equalities
 /// admit passed the exact cones' certificate and failed the core's check by 12.5 N, as
 /// Clarabel's optimum did, where the grasp is infeasible). Such rows are zero now.
 #[test]
