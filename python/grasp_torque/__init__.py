@@ -480,18 +480,46 @@ class BatchResult(NamedTuple):
 
 
 _Outputs = Tuple[Array, Array, Array, NDArray[np.int8]]
+_OUTPUT_NAMES = ("torque", "objective", "wrench_residual", "status")
 
 
 def _out(name: str, given: Optional[NDArray[Any]], shape: Tuple[int, ...], dtype: Any) -> NDArray[Any]:
+    """A preallocated output, checked (the native batch writes it in place, as the rows of
+    a C-ordered buffer), or a new one."""
     if given is None:
         return np.empty(shape, dtype=dtype)
-    if not isinstance(given, np.ndarray) or given.dtype != dtype:
-        raise ValueError(f"{name}: expected a numpy array of dtype {np.dtype(dtype).name}")
-    if given.shape != shape or not given.flags.c_contiguous or not given.flags.writeable:
+    want = np.dtype(dtype)
+    if not isinstance(given, np.ndarray):
         raise ValueError(
-            f"{name}: expected a writeable C-contiguous array of shape {shape}, got {given.shape}"
+            f"{name}: expected a numpy array of dtype {want.name} and shape {shape}, got {type(given).__name__}"
         )
+    if given.dtype != want:
+        got = given.dtype.name
+        if got == want.name:
+            got += f" in the other byte order ({given.dtype.str})"
+        raise ValueError(f"{name}: expected a numpy array of dtype {want.name}, got {got}")
+    if given.shape != shape:
+        raise ValueError(f"{name}: expected an array of shape {shape}, got {given.shape}")
+    if not given.flags.c_contiguous:
+        raise ValueError(
+            f"{name}: expected a C-contiguous array, got one with strides {given.strides}"
+        )
+    if not given.flags.writeable:
+        raise ValueError(f"{name}: expected a writeable array, got a read-only one")
     return given
+
+
+def _apart(outputs: Mapping[str, Optional[NDArray[Any]]], inputs: Mapping[str, Optional[NDArray[Any]]]) -> None:
+    """Refuses an output that shares memory with another output or with an input: the
+    native batch reads the inputs while it writes the outputs, from many threads."""
+    named = [(k, v) for k, v in outputs.items() if v is not None]
+    for i, (a, x) in enumerate(named):
+        for b, y in named[i + 1 :]:
+            if np.shares_memory(x, y):
+                raise ValueError(f"{a}: shares memory with {b}; each output needs an array of its own")
+        for b, y in inputs.items():
+            if y is not None and np.shares_memory(x, y):
+                raise ValueError(f"{a}: shares memory with the input {b}; pass an output array of its own")
 
 
 def _wrenches(W: Array, B: int) -> Tuple[Array, bool]:
@@ -629,6 +657,10 @@ def solve_batch(
     lead = (B,) if single else (B, K)
     outs = _outputs(lead, m, torque, objective, wrench_residual, status)
     F = _forces(contact_forces, lead, g.shape[2])
+    _apart(
+        dict(zip(_OUTPUT_NAMES, outs), contact_forces=F),
+        {"G": g, "JT": jt, "W": W3, "passive_torque": passive, "transmission": per_grasp},
+    )
     spec = {
         "contacts": _contacts(contacts),
         "torque_weights": torque_weights,
@@ -959,6 +991,10 @@ class Hand:
         lead = (B,) if single else (B, K)
         outs = _outputs(lead, m, torque, objective, wrench_residual, status)
         F = _forces(contact_forces, lead, n)
+        _apart(
+            dict(zip(_OUTPUT_NAMES, outs), contact_forces=F),
+            {"joint_positions": q, "W": W3, "positions": P, "normals": N, "object_pose": object_pose},
+        )
         errors = self._native.solve_batch(
             q,
             W3,

@@ -226,6 +226,47 @@ def test_preallocated_outputs_are_filled_in_place():
         gt.solve_batch(G, JT, W, PCWF, status=np.empty((50, 3)))
 
 
+def test_an_unusable_output_is_refused_for_what_it_is():
+    """Each fault of a preallocated output is named (dtype, byte order, shape, layout,
+    read-only), and an output that overlaps another or an input is refused before
+    anything is written: the batch reads its inputs while it writes, from many
+    threads."""
+    G, JT, W = gt.synthetic_grasps(20, seed=5)
+    m, n = JT.shape[1], JT.shape[2]
+    read_only = np.empty((20, m))
+    read_only.flags.writeable = False
+    faults = [
+        ({"torque": [[0.0] * m] * 20}, "torque: expected a numpy array of dtype float64 and shape \\(20, 9\\), got list"),
+        ({"torque": np.empty((20, m), np.float32)}, "torque: expected a numpy array of dtype float64, got float32$"),
+        ({"objective": np.empty(20, ">f8")}, "objective: .* got float64 in the other byte order \\(>f8\\)"),
+        ({"status": np.empty(20)}, "status: expected a numpy array of dtype int8, got float64"),
+        ({"torque": np.empty((20, m + 1))}, "torque: expected an array of shape \\(20, 9\\), got \\(20, 10\\)"),
+        ({"torque": np.empty((20, 2 * m))[:, ::2]}, "torque: expected a C-contiguous array, got one with strides \\(144, 16\\)"),
+        ({"torque": read_only}, "torque: expected a writeable array, got a read-only one"),
+    ]
+    shared = np.empty(40)
+    faults += [
+        ({"objective": shared[:20], "wrench_residual": shared[10:30]}, "objective: shares memory with wrench_residual"),
+        ({"torque": JT.reshape(-1)[: 20 * m].reshape(20, m)}, "torque: shares memory with the input JT"),
+        ({"contact_forces": G.reshape(-1)[: 20 * n].reshape(20, n)}, "contact_forces: shares memory with the input G"),
+    ]
+    for given, message in faults:
+        before = [a.copy() for a in (G, JT, W)]
+        with pytest.raises(ValueError, match=message):
+            gt.solve_batch(G, JT, W, PCWF, **given)
+        for a, b in zip((G, JT, W), before):
+            np.testing.assert_array_equal(a, b)
+    # Disjoint parts of one buffer are fine.
+    out = gt.solve_batch(G, JT, W, PCWF, objective=shared[:20], wrench_residual=shared[20:])
+    np.testing.assert_array_equal(shared[:20], out.objective)
+    # Hand.solve_batch checks its outputs alike.
+    hand = gt.Hand(os.path.join(os.path.dirname(__file__), "..", "..", "fixtures", "urdf", "allegro", "allegro_hand_right.urdf"))
+    tip = [{"link": "link_3.0_tip", "model": "pcwf", "mu": 0.5}]
+    q = np.zeros(3 * len(hand.joint_names))
+    with pytest.raises(ValueError, match="torque: shares memory with the input joint_positions"):
+        hand.solve_batch(q.reshape(3, -1), np.zeros((3, 6)), tip, torque=q[-12:].reshape(3, 4))
+
+
 def test_the_gil_is_released():
     G, JT, W = gt.synthetic_grasps(4000, seed=4)
     t0 = time.perf_counter()
