@@ -599,7 +599,9 @@ impl ConicForm {
                 }
                 ConeKind::Nonnegative(_) => {
                     for i in r {
-                        primal = fmax(primal, -s[i]);
+                        if !self.limit_rows.contains(&i) {
+                            primal = fmax(primal, -s[i]);
+                        }
                         dual = fmax(dual, -z[i]);
                     }
                 }
@@ -620,13 +622,19 @@ impl ConicForm {
         let (stationarity, basis_ok) = self.torque_terms(z, eq, grad, gsize);
         // The maxima above skip NaN: a non-finite input fails here instead.
         let finite = basis_ok && all_finite(b) && all_finite(x) && all_finite(&z[eq..]);
-        // Primal violation against the size of its terms, |b_i| + Σ_j |a_ij x_j|. Its
-        // lower bound max(|b_i|, |(A x)_i|) is formed first: a violation within
-        // tolerance of that is within tolerance of the terms, and only a point that
-        // fails it pays for the second pass, |A| |x|.
+        // Primal violation against the size of its terms, |b_i| + Σ_j |a_ij x_j|, over
+        // every row but the torque limits'. Its lower bound max(|b_i|, |(A x)_i|) is
+        // formed first: a violation within tolerance of that is within tolerance of the
+        // terms, and only a point that fails it pays for the second pass, |A| |x|. A
+        // limit's constant is in torque units and may be loose by any factor (1e9 for
+        // "no limit"): it must not set the scale of the force rows (it let a point
+        // 2.4 times outside a cone pass), so each limit row is judged on its own below.
+        let limits = self.limit_rows.clone();
         let mut scale = f64::MIN_POSITIVE;
-        for (bi, si) in b.iter().zip(s.iter()) {
-            scale = fmax(scale, fmax(bi.abs(), (bi - si).abs()));
+        for (i, (bi, si)) in b.iter().zip(s.iter()).enumerate() {
+            if !limits.contains(&i) {
+                scale = fmax(scale, fmax(bi.abs(), (bi - si).abs()));
+            }
         }
         if primal > tol * scale {
             for (v, xj) in xabs.iter_mut().zip(x) {
@@ -636,9 +644,24 @@ impl ConicForm {
                 *z = bi.abs();
             }
             add_columns(size, &self.abs_cols, xabs, 1.0);
-            scale = size.iter().fold(scale, |a, v| fmax(a, *v));
+            for (i, v) in size.iter().enumerate() {
+                if !limits.contains(&i) {
+                    scale = fmax(scale, *v);
+                }
+            }
         }
-        let (primal, dual) = (primal / scale, dual / zscale);
+        let mut primal = primal / scale;
+        // A limit row against its own terms, |b_i| + ‖a_i‖₁ ‖x_τ‖∞: its torque comes out
+        // of the linear algebra with an error relative to the largest (the core's
+        // check reads τ so too), and a bound at 0 has no other term.
+        let xmax = x[..m].iter().fold(0.0f64, |a, v| fmax(a, v.abs()));
+        for i in limits.filter(|&i| s[i] < 0.0) {
+            let (lo, hi) = self.row_span[i];
+            let row: f64 = self.a_padded.row(i)[lo..hi].iter().map(|v| v.abs()).sum();
+            let size = (b[i].abs() + row * xmax).max(f64::MIN_POSITIVE);
+            primal = fmax(primal, -s[i] / size);
+        }
+        let dual = dual / zscale;
         // Complementarity against the sizes of the gap's terms (xᵀPx + bᵀz at a
         // stationary point), with no floor: the scaled optimum is not always of size 1
         // (rows that x = 0 meets can set α), and a floor of 1 once let a point with 4e5
@@ -717,8 +740,9 @@ pub const CERTIFICATE_TOLERANCE: f64 = 1e-9;
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Certificate {
     /// Largest cone or equality violation of `s = b − A x`, relative to the largest
-    /// `|b_i| + Σ_j |a_ij x_j|` (to `max(|b_i|, |(A x)_i|)`, a lower bound of it, when
-    /// that already passes).
+    /// `|b_i| + Σ_j |a_ij x_j|` of the rows but the torque limits' (to
+    /// `max(|b_i|, |(A x)_i|)`, a lower bound of it, when that already passes); a torque
+    /// limit's, relative to its own `|b_i| + ‖a_i‖₁ ‖x_τ‖∞`.
     pub primal: f64,
     /// Largest violation of `z ∈ K*`.
     pub dual: f64,

@@ -204,6 +204,65 @@ fn robustness_sweep_against_clarabel_and_the_linearisations() {
     assert!(count[0] > 100 && count[1] > 10, "{count:?}");
 }
 
+/// A torque limit far beyond the torques changes nothing: the same status and σ on
+/// the exact cones as without it, whether it is 1e3, 1e6 or 1e9 times the torques
+/// (a limit of 1e9 is how a user says "none"), on both sides or one. Its constant once
+/// set the scale of the certificate's primal check for every row, so a point outside
+/// a cone passed it (sweep seed 13316 at a quarter of the friction: σ 5.08 against
+/// 5.20, caught by the core's check as a numerical failure; seed 992275 at normal
+/// friction: infeasible, then a failed optimum at σ 52).
+#[test]
+fn a_loose_torque_limit_changes_no_answer() {
+    use grasp_torque::TorqueLimit;
+    let (mut optimal, mut infeasible) = (0, 0);
+    let seeds = (0..150u64)
+        .map(|s| (s, 1.0))
+        .chain((1000..1150).map(|s| (s, 0.25)))
+        .chain([(13316, 0.25), (992275, 1.0)]);
+    for (seed, friction) in seeds {
+        let p = grasp(seed, friction);
+        let free = run(&p, Backend::ActiveSet, Cones::Exact);
+        assert!(
+            matches!(free.status, Status::Optimal | Status::Infeasible),
+            "seed {seed}"
+        );
+        // The torques' size: the answer's, and at least 1 N·m (an infeasible grasp has
+        // none; the sweep's torques are of that order).
+        let size = match free.status {
+            Status::Optimal => free.torque.iter().fold(0.0f64, |a, t| a.max(t.abs())),
+            _ => 0.0,
+        }
+        .max(1.0);
+        for factor in [1e3, 1e6, 1e9] {
+            let t = factor * size;
+            for limit in [TorqueLimit::Symmetric(t), TorqueLimit::Range(None, Some(t))] {
+                let mut q = p.clone();
+                q.torque_limits = Some(vec![Some(limit); p.joints()]);
+                let s = run(&q, Backend::ActiveSet, Cones::Exact);
+                assert_eq!(
+                    s.status, free.status,
+                    "seed {seed} friction {friction}, limit {limit:?}: {:?} {:?}",
+                    s.reason, s.warnings
+                );
+                if s.status == Status::Optimal {
+                    assert!(
+                        rel(s.objective, free.objective) <= 1e-9,
+                        "seed {seed} friction {friction}, limit {limit:?}: σ {} against {}",
+                        s.objective,
+                        free.objective
+                    );
+                }
+            }
+        }
+        optimal += usize::from(free.status == Status::Optimal);
+        infeasible += usize::from(free.status == Status::Infeasible);
+    }
+    assert!(
+        optimal > 100 && infeasible > 20,
+        "{optimal} optimal, {infeasible} infeasible"
+    );
+}
+
 /// Clarabel's infeasibility is reported only with a proof checked from scratch. On two
 /// grasps of a sweep beyond the ones here (seeds 30017 at normal friction and 30179 at
 /// a quarter of it), Clarabel at its default tolerances stopped after 3 to 5
