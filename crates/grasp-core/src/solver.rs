@@ -669,6 +669,38 @@ impl TorqueQp {
         (viol, bad)
     }
 
+    /// Puts each torque that misses a limit by no more than the check's tolerance on
+    /// that limit (the same measure as [`Self::limit_violation`]'s). A backend ends on
+    /// an active limit only to rounding, or to its tolerance (an interior-point
+    /// method), and a tendon that only pulls (upper limit 0) must not be reported
+    /// pushing by 5e-18. A torque further out is left for the check to refuse. The
+    /// error's scale is the limit and the other torques, not the torque itself: a
+    /// torque of 1e300 is not a rounding of a limit of 5.
+    fn snap_to_limits(&self, tau: &mut [f64], tol: f64) {
+        if self.limits().is_empty() {
+            return;
+        }
+        // The two largest magnitudes: the largest but τ_j's own, for every j.
+        let (mut first, mut second, mut at) = (0.0f64, 0.0f64, usize::MAX);
+        for (j, t) in tau.iter().enumerate() {
+            let a = t.abs();
+            if a > first {
+                (second, first, at) = (first, a, j);
+            } else if a > second {
+                second = a;
+            }
+        }
+        for &(j, lo, hi) in self.limits() {
+            let t = tau[j];
+            let terms = if j == at { second } else { first };
+            if t < lo && !exceeds(lo - t, tol * (lo.abs() + terms)) {
+                tau[j] = lo;
+            } else if t > hi && !exceeds(t - hi, tol * (hi.abs() + terms)) {
+                tau[j] = hi;
+            }
+        }
+    }
+
     /// What [`Check::Lazy`] keeps of [`Self::complete`] for an optimal answer of a
     /// backend that certified its rows (the torque limits among them): σ, which must
     /// be finite, so τ is. Returns false, with `out` untouched but for σ, when the full
@@ -678,11 +710,12 @@ impl TorqueQp {
         if !out.status.has_answer() || self.model.equilibrium == Equilibrium::PaperModel {
             return false;
         }
+        let tol = self.check_tolerance(tol);
+        self.snap_to_limits(&mut out.torque, tol);
         out.objective = self.objective(&out.torque);
         if !out.objective.is_finite() {
             return false;
         }
-        let tol = self.check_tolerance(tol);
         out.contact_forces.clear();
         out.joint_torque.clear();
         let d = &mut out.diagnostics;
@@ -708,6 +741,9 @@ impl TorqueQp {
             out.joint_torque.clear();
             out.objective = 0.0;
             return;
+        }
+        if out.status.has_answer() {
+            self.snap_to_limits(&mut out.torque, tol);
         }
         let tau = &out.torque;
         out.contact_forces.resize(n, 0.0);
