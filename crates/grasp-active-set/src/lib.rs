@@ -64,7 +64,11 @@ pub struct ActiveSetSettings {
     /// Iteration cap (each iteration is one subproblem solve or one phase-1 step).
     /// Default 10 000.
     pub max_iterations: usize,
-    /// A row holds when `Ĥ_i y − ĉ_i ≥ −feasibility_tolerance · scale`. Default 1e-9.
+    /// A row holds when `Ĥ_i y − ĉ_i ≥ −feasibility_tolerance · scale`. Default 1e-11:
+    /// a row is normalised by its norm, which a joint with short moment arms inflates
+    /// through its huge column of H while its torque stays small, so that 1e-9 let a
+    /// force miss its face by 19 N. A residual's rounding, about `ε n scale`, is still
+    /// far below it.
     pub feasibility_tolerance: f64,
     /// A multiplier counts as non-negative above `−multiplier_tolerance · scale`.
     /// Default 1e-10.
@@ -85,7 +89,7 @@ impl Default for ActiveSetSettings {
         Self {
             phase1: Phase1::Dual,
             max_iterations: 10_000,
-            feasibility_tolerance: 1e-9,
+            feasibility_tolerance: 1e-11,
             multiplier_tolerance: 1e-10,
             dependence_tolerance: 1e-10,
             elastic_penalty: 1e3,

@@ -263,6 +263,71 @@ fn a_loose_torque_limit_changes_no_answer() {
     );
 }
 
+/// A joint with short moment arms (a contact near its axis): 100 of the sweep's
+/// grasps, each with each joint's row of Jᵀ in turn scaled by 1e-4 and 1e-6. Scaling a
+/// joint's torque changes which torques are feasible only by that scale, so the
+/// status is the unscaled grasp's; it makes that joint's torque cheaper, so σ is not
+/// above the unscaled σ; and σ* ≤ σ(8). At 1e-4 every grasp is decided, linear and
+/// exact; at 1e-6 every one linear, and all but two exact (numerical failures:
+/// docs/solver.md, "Limits"), as the unscaled grasp. The row's huge column in H made
+/// its normalised row look feasible within 1e-9 while a force missed its face by 19 N
+/// (seed 5085 at a quarter of the friction, by `scripts/fuzz_answers.py moment-arms`;
+/// the core's check caught it), and three linear solves here ended in numerical
+/// failures: the active-set method's feasibility tolerance is 1e-11.
+#[test]
+fn a_joint_with_short_moment_arms_is_decided() {
+    // Numerical failures at 1e-6, linear and exact.
+    let mut undecided = [0usize; 2];
+    for (friction, seeds) in [(1.0, 5000..5050u64), (0.25, 5000..5050u64)] {
+        for seed in seeds {
+            let p = grasp(seed, friction);
+            let free = [Cones::Linear, Cones::Exact].map(|c| run(&p, Backend::ActiveSet, c));
+            for (j, scale) in (0..p.joints()).flat_map(|j| [(j, 1e-4), (j, 1e-6)]) {
+                let mut q = p.clone();
+                for v in q.jacobian_transpose.row_mut(j) {
+                    *v *= scale;
+                }
+                let [lin, exact] =
+                    [Cones::Linear, Cones::Exact].map(|c| run(&q, Backend::ActiveSet, c));
+                for (i, (s, f)) in [(&lin, &free[0]), (&exact, &free[1])]
+                    .into_iter()
+                    .enumerate()
+                {
+                    let at = format!(
+                        "seed {seed} friction {friction}, joint {j} × {scale:e}, cones {i}"
+                    );
+                    if scale == 1e-6 && s.status == Status::NumericalFailure {
+                        undecided[i] += 1;
+                        continue;
+                    }
+                    assert_eq!(s.status, f.status, "{at}: {:?}", s.reason);
+                    // σ to the core check's tolerance (1e-8): the scaled grasp's rows,
+                    // and so its σ, are as accurate as that check makes them.
+                    if s.status == Status::Optimal {
+                        assert!(
+                            s.objective <= f.objective * (1.0 + 1e-8),
+                            "{at}: σ {} above the unscaled {}",
+                            s.objective,
+                            f.objective
+                        );
+                    }
+                }
+                if lin.status == Status::Optimal && exact.status == Status::Optimal {
+                    assert!(
+                        exact.objective <= lin.objective * (1.0 + 1e-8),
+                        "seed {seed}"
+                    );
+                }
+            }
+        }
+    }
+    eprintln!(
+        "moment arms × 1e-6: {} linear and {} exact numerical failures",
+        undecided[0], undecided[1]
+    );
+    assert!(undecided[0] == 0 && undecided[1] <= 2, "{undecided:?}");
+}
+
 /// Clarabel's infeasibility is reported only with a proof checked from scratch. On two
 /// grasps of a sweep beyond the ones here (seeds 30017 at normal friction and 30179 at
 /// a quarter of it), Clarabel at its default tolerances stopped after 3 to 5
