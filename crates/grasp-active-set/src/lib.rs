@@ -39,6 +39,9 @@ mod newton;
 pub use exact::{ExactSolver, CERTIFICATE_TOLERANCE};
 use factor::Factor;
 
+/// The factor on [`ActiveSetSettings::feasibility_tolerance`] of a solve's first run.
+pub const TIGHT: f64 = 1e-2;
+
 /// How a cold solve finds its first feasible point (Step 1).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Phase1 {
@@ -64,11 +67,13 @@ pub struct ActiveSetSettings {
     /// Iteration cap (each iteration is one subproblem solve or one phase-1 step).
     /// Default 10 000.
     pub max_iterations: usize,
-    /// A row holds when `Ĥ_i y − ĉ_i ≥ −feasibility_tolerance · scale`. Default 1e-11:
-    /// a row is normalised by its norm, which a joint with short moment arms inflates
-    /// through its huge column of H while its torque stays small, so that 1e-9 let a
-    /// force miss its face by 19 N. A residual's rounding, about `ε n scale`, is still
-    /// far below it.
+    /// A row holds when `Ĥ_i y − ĉ_i ≥ −feasibility_tolerance · scale`. Default 1e-9.
+    /// A solve first iterates to [`TIGHT`] times it: a row is normalised by its norm,
+    /// which a joint with short moment arms inflates through its huge column of H while
+    /// its torque stays small, so that 1e-9 let a force miss its face by 19 N. Where
+    /// that finds no optimum (on a grasp so ill-conditioned that rounding exceeds it, or
+    /// an infeasibility proven only by a row within this tolerance), the solve runs
+    /// again at this one.
     pub feasibility_tolerance: f64,
     /// A multiplier counts as non-negative above `−multiplier_tolerance · scale`.
     /// Default 1e-10.
@@ -89,7 +94,7 @@ impl Default for ActiveSetSettings {
         Self {
             phase1: Phase1::Dual,
             max_iterations: 10_000,
-            feasibility_tolerance: 1e-11,
+            feasibility_tolerance: 1e-9,
             multiplier_tolerance: 1e-10,
             dependence_tolerance: 1e-10,
             elastic_penalty: 1e3,
@@ -753,22 +758,39 @@ impl Engine {
         if hot && self.solve_mapped(w, out) {
             return;
         }
-        let ws = &mut self.ws;
-        ws.b.copy_from_slice(&self.c0n);
-        add_columns(&mut ws.b, &self.mn_cols, w, -1.0);
-        ws.u.iter_mut().for_each(|v| *v = 0.0);
-        add_columns(&mut ws.u, &self.pu_cols, w, 1.0);
-        // Starting point y0.
-        ws.z.iter_mut().for_each(|v| *v = 0.0);
-        ws.e.iter_mut().for_each(|v| *v = 0.0);
-        if !hot {
-            ws.in_set.iter_mut().for_each(|v| *v = false);
-            ws.factor.clear();
-        }
-        ws.reusable = true;
-        let mut state = Iter::new(self);
-        let end = state.run(warm);
-        let iterations = state.iterations;
+        // First to TIGHT times the feasibility tolerance; again at the tolerance itself
+        // where that run finds no optimum and a looser one might (ActiveSetSettings).
+        let (mut tight, mut iterations) = (true, 0);
+        let end = loop {
+            let ws = &mut self.ws;
+            ws.b.copy_from_slice(&self.c0n);
+            add_columns(&mut ws.b, &self.mn_cols, w, -1.0);
+            ws.u.iter_mut().for_each(|v| *v = 0.0);
+            add_columns(&mut ws.u, &self.pu_cols, w, 1.0);
+            // Starting point y0.
+            ws.z.iter_mut().for_each(|v| *v = 0.0);
+            ws.e.iter_mut().for_each(|v| *v = 0.0);
+            if !hot || !tight {
+                ws.in_set.iter_mut().for_each(|v| *v = false);
+                ws.factor.clear();
+            }
+            ws.reusable = true;
+            let mut state = Iter::new(self, tight);
+            // The iteration cap is on both runs together.
+            state.iterations = iterations;
+            let end = state.run(warm);
+            iterations = state.iterations;
+            let again = tight
+                && match end {
+                    End::Optimal | End::IterationLimit(_) => false,
+                    End::Infeasible(_) => state.within_loose,
+                    End::Numerical(_) => true,
+                };
+            if !again {
+                break end;
+            }
+            tight = false;
+        };
         self.ws.reusable &= matches!(end, End::Optimal) && self.ws.factor.contains(S_ROW);
         self.note_hot_start(hot && matches!(end, End::Optimal) && iterations == 0);
         out.iterations = iterations;
@@ -873,10 +895,17 @@ struct Iter<'s> {
     bland: bool,
     /// Set when the dual phase stopped making progress; the elastic start takes over.
     stalled: bool,
+    /// Rows hold to [`TIGHT`] times the feasibility tolerance (the first run).
+    tight: bool,
+    /// The feasibility tolerance of this run, relative to the scale.
+    feasibility: f64,
+    /// Set with `infeasible` (or an elastic proof) when the row, or the elastic
+    /// variable, was violated by no more than the feasibility tolerance itself.
+    within_loose: bool,
 }
 
 impl<'s> Iter<'s> {
-    fn new(s: &'s mut Engine) -> Self {
+    fn new(s: &'s mut Engine, tight: bool) -> Self {
         // A torque limit that y = 0 breaks (a range that excludes 0, or passive torques
         // beyond a limit) says how large the answer is; one that it meets does not.
         let scale = s.ws.b[s.scale_rows..]
@@ -885,6 +914,7 @@ impl<'s> Iter<'s> {
             .fold(norm_inf(&s.ws.b[..s.scale_rows]), |a, &v| a.max(v))
             .max(f64::MIN_POSITIVE);
         let penalty = s.settings.elastic_penalty * scale.max(1e-12);
+        let feasibility = s.settings.feasibility_tolerance * if tight { TIGHT } else { 1.0 };
         Self {
             s,
             iterations: 0,
@@ -894,6 +924,9 @@ impl<'s> Iter<'s> {
             scale,
             bland: false,
             stalled: false,
+            tight,
+            feasibility,
+            within_loose: false,
         }
     }
 
@@ -901,9 +934,15 @@ impl<'s> Iter<'s> {
         self.s.null_basis.ncols()
     }
 
+    #[inline]
     fn feas_tol(&self) -> f64 {
         let y = norm_inf(&self.s.ws.z[..self.k()]);
-        self.s.settings.feasibility_tolerance * self.scale.max(y)
+        self.feasibility * self.scale.max(y)
+    }
+
+    /// Whether a violation `v` is within the untightened feasibility tolerance.
+    fn loosely_within(&self, v: f64) -> bool {
+        self.tight && v <= self.feas_tol() / TIGHT
     }
 
     /// Adds row `i` to the key set; false when it depends on the rows already there.
@@ -1190,6 +1229,7 @@ impl<'s> Iter<'s> {
                 let full = t2 <= t1.0;
                 let step = if full { t2 } else { t1.0 };
                 if step.is_infinite() {
+                    self.within_loose = self.loosely_within(worst.0);
                     return Err(p);
                 }
                 for pos in 0..t {
@@ -1308,6 +1348,7 @@ impl<'s> Iter<'s> {
                 // Stationary with s free: the penalty is too small, or no torque exists.
                 if increases == self.s.settings.penalty_increases {
                     return if self.s.ws.z[k] > self.feas_tol() {
+                        self.within_loose = self.loosely_within(self.s.ws.z[k]);
                         End::Infeasible(None)
                     } else {
                         End::Numerical("the elastic variable would not leave the key set's span")
