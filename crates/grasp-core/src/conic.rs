@@ -653,8 +653,9 @@ impl ConicForm {
         // formed first: a violation within tolerance of that is within tolerance of the
         // terms, and only a point that fails it pays for the second pass, |A| |x|. A
         // limit's constant is in torque units and may be loose by any factor (1e9 for
-        // "no limit"): it must not set the scale of the force rows (it let a point
-        // 2.4 times outside a cone pass), so each limit row is judged on its own below.
+        // "no limit"): it must not set the scale of the force rows (a limit of 1e9 let
+        // a point 83 N outside a cone pass, sweep seed 27), so each limit row is judged
+        // on its own below.
         let limits = self.limit_rows.clone();
         let mut scale = f64::MIN_POSITIVE;
         for (i, (bi, si)) in b.iter().zip(s.iter()).enumerate() {

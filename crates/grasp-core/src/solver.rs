@@ -670,7 +670,8 @@ impl TorqueQp {
     }
 
     /// Puts each torque that misses a limit by no more than the check's tolerance on
-    /// that limit (the same measure as [`Self::limit_violation`]'s). A backend ends on
+    /// that limit ([`Self::limit_violation`]'s measure, but with the other torques for
+    /// the error's scale, below). A backend ends on
     /// an active limit only to rounding, or to its tolerance (an interior-point
     /// method), and a tendon that only pulls (upper limit 0) must not be reported
     /// pushing by 5e-18. A torque further out is left for the check to refuse. The
