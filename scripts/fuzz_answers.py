@@ -2,8 +2,10 @@
 """Mutated matrix-form problems through `grasp-torque solve`, every optimal answer
 checked from the problem file alone, and again in other units.
 
-Each seed takes one bundled matrix-form problem (`fixtures/*.json`,
-`fixtures/sweep/*.json`) and makes one to three edits within the input domain: a row
+Each seed takes one bundled problem in matrix form (`fixtures/*.json`,
+`fixtures/sweep/*.json`, and the geometry, hand and Table 1 problems through
+`grasp-torque build`, but those with a transmission or passive torques) and makes one
+to three edits within the input domain: a row
 of Jᵀ scaled by 10^±9, made a multiple of another (×1, ×−1, ×(1 + 1e-12), ×1e-8) or
 reduced to one tiny entry; noise of 1e-15 to 1e-8 on G or Jᵀ; the wrench scaled,
 zeroed or pushed along one component; a friction coefficient or torsional length
@@ -11,9 +13,10 @@ scaled; torque limits (symmetric, one-sided, tendons that only pull), a minimum
 normal force, torque weights 1e±4 apart; the Euclidean internal forces. It solves
 the problem with linear and exact cones and checks each `optimal` answer against the
 file, not the solver's diagnostics:
-- `G f = w`, each row to 1e-7 of its normwise terms, `‖row‖₁ ‖f‖∞ + |w_i|`, and
-  `Jᵀ f = τ` to 1e-7 of the largest row's (a row of Jᵀ within the rank tolerance of
-  the others is rounding to the model, which leaves its torque at 0);
+- `G f = w` and `Jᵀ f = τ`, each row to 1e-7 of the normwise terms `‖row‖₁ ‖f‖∞ +
+  |target|` of the largest row of its block (G's force rows, G's moment rows, Jᵀ): a
+  row within the rank tolerance of its block's largest is rounding to the model, which
+  sets it to 0;
 - each contact's force in its exact cone (the inscribed polyhedra lie inside it),
   to 1e-7 of the largest force in the force metric (mz as mz/mu_torsion);
 - every torque within its limits, exactly;
@@ -52,11 +55,27 @@ import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.path.join(ROOT, "target", "release", "grasp-torque")
-FILES = [
-    f
-    for f in sorted(glob.glob(os.path.join(ROOT, "fixtures", "*.json")) + glob.glob(os.path.join(ROOT, "fixtures", "sweep", "*.json")))
-    if "grasp_matrix" in json.load(open(f))
-]
+
+
+def sources():
+    """(name, problem) for every matrix-form fixture, and for the geometry- and hand-form
+    ones in matrix form (`grasp-torque build`) but those with a transmission or
+    passive torques, whose `Jᵀ f = τ` the check could not read directly."""
+    out = []
+    for f in sorted(glob.glob(os.path.join(ROOT, "fixtures", "*.json")) + glob.glob(os.path.join(ROOT, "fixtures", "sweep", "*.json"))):
+        p = json.load(open(f))
+        if "grasp_matrix" in p:
+            out.append((os.path.basename(f), p))
+    for d in ("geometry", "hands", "table1"):
+        for f in sorted(glob.glob(os.path.join(ROOT, "fixtures", d, "*.json"))):
+            built = subprocess.run([BIN, "build", f], capture_output=True, text=True)
+            if built.returncode == 0:
+                p = json.loads(built.stdout)
+                if "transmission" not in p and "passive_torque" not in p:
+                    out.append((f"{d}/{os.path.basename(f)}", p))
+    return out
+
+
 DIM = {"fpc": 1, "pcwf": 3, "sfcl": 4, "sfce": 4}
 TOL = 1e-7
 
@@ -149,7 +168,8 @@ def in_units(p, F, L):
     if "torque_limits" in q:
         q["torque_limits"] = [[scale(x) for x in t] if isinstance(t, list) else scale(t) for t in q["torque_limits"]]
     if "min_normal_force" in q:
-        q["min_normal_force"] *= F
+        fmin = q["min_normal_force"]
+        q["min_normal_force"] = [v * F for v in fmin] if isinstance(fmin, list) else fmin * F
     return q
 
 
@@ -183,10 +203,12 @@ def wrong(p, d):
     for name, A, target in (("G f − w", G, w), ("Jᵀ f − τ", JT, tau)):
         r = np.abs(A @ f - target)
         terms = np.abs(A).sum(axis=1) * fmax + np.abs(target)
-        if name.startswith("J"):
-            # Normwise over the joints: a row of Jᵀ within the rank tolerance of the
-            # largest is rounding to the model, which leaves its τ at 0.
-            terms[:] = terms.max()
+        # Normwise over a block (the joints; G's force rows, its moment rows): a row
+        # within the rank tolerance of its block's largest is rounding to the model,
+        # which sets it to 0.
+        blocks = [slice(0, 3), slice(3, 6)] if name.startswith("G") else [slice(None)]
+        for b in blocks:
+            terms[b] = terms[b].max()
         i = int(np.argmax(r - TOL * terms))
         if r[i] > TOL * terms[i]:
             out.append(f"{name}: row {i} misses by {r[i]:.3e} (terms {terms[i]:.3e})")
@@ -278,12 +300,13 @@ def main():
         joint_units(int(sys.argv[2]), int(sys.argv[3]))
     start, count = int(sys.argv[1]), int(sys.argv[2])
     problems, counts = 0, {}
+    bundled = sources()
     for seed in range(start, start + count):
         rnd = random.Random(seed)
-        src = rnd.choice(FILES)
-        p = json.load(open(src))
+        name, p = rnd.choice(bundled)
+        p = json.loads(json.dumps(p))
         edits = mutate(rnd, p)
-        at = f"seed {seed} ({os.path.basename(src)}: {', '.join(edits)})"
+        at = f"seed {seed} ({name}: {', '.join(edits)})"
         unit_free = p.get("internal_forces") != "euclidean" and (p.get("linearization") or {}).get("sfce_spacing") != "paper"
         F, L = 10 ** rnd.uniform(-3, 3), 10 ** rnd.uniform(-3, 3)
         answers = {}
