@@ -1,18 +1,17 @@
 #!/usr/bin/env python3
-"""Mutated matrix-form problems through `grasp-torque solve`, every optimal answer
-checked from the problem file alone, and again in other units.
+"""Mutated problems through `grasp-torque solve`, every optimal answer checked from
+the problem file alone, and again in other units.
 
 Each seed takes one bundled problem in matrix form (`fixtures/*.json`,
 `fixtures/sweep/*.json`, and the geometry, hand and Table 1 problems through
 `grasp-torque build`, but those with a transmission or passive torques) and makes one
-to three edits within the input domain: a row
-of Jᵀ scaled by 10^±9, made a multiple of another (×1, ×−1, ×(1 + 1e-12), ×1e-8) or
-reduced to one tiny entry; noise of 1e-15 to 1e-8 on G or Jᵀ; the wrench scaled,
-zeroed or pushed along one component; a friction coefficient or torsional length
-scaled; torque limits (symmetric, one-sided, tendons that only pull), a minimum
-normal force, torque weights 1e±4 apart; the Euclidean internal forces. It solves
-the problem with linear and exact cones and checks each `optimal` answer against the
-file, not the solver's diagnostics:
+to three edits within the input domain: a row of Jᵀ scaled by 10^±9, made a multiple
+of another (×1, ×−1, ×(1 + 1e-12), ×1e-8) or reduced to one tiny entry; noise of
+1e-15 to 1e-8 on G or Jᵀ; the wrench scaled, zeroed or pushed along one component; a
+friction coefficient or torsional length scaled; torque limits (symmetric, one-sided,
+tendons that only pull), a minimum normal force, torque weights 1e±4 apart; the
+Euclidean internal forces. It solves the problem with linear and exact cones and
+checks each `optimal` answer against the file, not the solver's diagnostics:
 - `G f = w` and `Jᵀ f = τ`, each row to 1e-7 of the normwise terms `‖row‖₁ ‖f‖∞ +
   |target|` of the largest row of its block (G's force rows, G's moment rows, Jᵀ): a
   row within the rank tolerance of its block's largest is rounding to the model, which
@@ -27,17 +26,17 @@ file, not the solver's diagnostics:
   the paper's SFCe latitudes, which are not unit-free by design (README, "Problem
   files"), or the other units leave the input domain.
 It reports each failure of these, each run that exits other than 0, 2, 3 or 4, and
-each `numerical_failure` or `iteration_limit` (not a wrong answer, but no answer:
-all seen so far come from a joint whose moment arms are 1e-8 of the others', or a
-singular value of [G; Jᵀ] within a factor of 10 of the rank tolerance; see
-docs/solver.md, "Limits").
+each `numerical_failure` or `iteration_limit` (not a wrong answer, but no answer: all
+seen so far come from a row of Jᵀ far from the others' size, a joint whose moment
+arms are 1e-6 to 1e-9 of the others' or as many times larger, or a singular value of
+[G; Jᵀ] within a factor of 10 of the rank tolerance; docs/solver.md, "Limits").
 
 `fuzz_answers.py joint-units FROM COUNT` solves the sweep's grasps with each joint's
 torque in its own unit (Jᵀ's row times s_j, 10^U(−2, 2), the weight 1/s_j²) and
 compares status and σ with the SI answer. `fuzz_answers.py moment-arms SCALE FROM
-COUNT` solves the sweep's grasps (seeds FROM..,
-at normal and at a quarter of the friction; `fallbacks write`) with one joint's moment
-arms scaled by SCALE, the same checks on each optimal answer, and counts the statuses.
+COUNT` solves the sweep's grasps (seeds FROM.., at normal and at a quarter of the
+friction; `fallbacks write`) with one joint's moment arms scaled by SCALE, the same
+checks on each optimal answer, and counts the statuses.
 
 Usage: python3 scripts/fuzz_answers.py FROM COUNT   (numpy; after `cargo build --release`
 and `cargo build --release -p grasp-torque --example fallbacks`)
