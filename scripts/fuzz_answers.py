@@ -53,7 +53,7 @@ import tempfile
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-BIN = os.path.join(ROOT, "target", "release", "grasp-torque")
+BIN = os.environ.get("GRASP_TORQUE_BIN") or os.path.join(ROOT, "target", "release", "grasp-torque")
 
 
 def sources():

@@ -23,7 +23,7 @@
 //! (most negative multiplier, Step 4): O(k²) per iteration, no allocation.
 //! Zero-length steps switch to Bland's rule, which rules out cycling.
 
-use grasp_core::linalg::{decompose, orthonormal_columns, RankThreshold};
+use grasp_core::linalg::{decompose, orthonormal_columns, RankThreshold, ROW_SPREAD};
 use grasp_core::matrix::{add_columns, dot, min_value, norm_inf, write_columns};
 use grasp_core::{
     Capabilities, ConicForm, EqFactors, ForceSpaceQp, InequalityRows, LeastDistance, Matrix,
@@ -420,9 +420,24 @@ fn factors_cheaper(m: usize, p: usize) -> bool {
 impl Equalities {
     fn new(qp: &LeastDistance<'_>) -> Result<Self, BuildError> {
         let cheaper = factors_cheaper(qp.weights.len(), qp.eq.nrows());
+        // C D⁻¹ᐟ²'s columns spread as g does (below): a joint whose moment arms are 1e-8
+        // of the others' has one 1e8 times theirs, and the decomposition's null basis
+        // then carries an error of ε against rows of that joint 1e-8 of the rest. The
+        // factors keep each row's digits (`orthonormal_columns`).
+        let spread = |f: &EqFactors<'_>| {
+            let (lo, hi) = qp
+                .weights
+                .iter()
+                .zip(f.scale)
+                .map(|(w, r)| w.sqrt() / r)
+                .fold((f64::INFINITY, 0.0f64), |(lo, hi), g| {
+                    (lo.min(g), hi.max(g))
+                });
+            hi > ROW_SPREAD * lo
+        };
         if let Some(eqs) = qp
             .eq_factors
-            .filter(|_| cheaper)
+            .filter(|f| cheaper || spread(f))
             .and_then(|f| Self::from_factors(qp, f))
         {
             return Ok(eqs);

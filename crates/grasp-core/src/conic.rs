@@ -27,7 +27,7 @@
 //! answer is the same in any units and at any load.
 
 use crate::contact::ContactModel;
-use crate::linalg::{decompose, RankThreshold};
+use crate::linalg::{decompose, orthonormal_columns, RankThreshold, ROW_SPREAD};
 use crate::matrix::{add_columns, dot4, norm2, write_columns, Matrix};
 use crate::qp::{ConeRepr, RowId, TorqueQp};
 
@@ -236,6 +236,7 @@ impl ConicForm {
             bws.push(bw);
         };
         let mut cones = Vec::new();
+        let mut eq_norms = Vec::with_capacity(model.equality_rows());
         for i in 0..model.equality_rows() {
             // C τ = −eq_w w, each row normalised in the scaled variables.
             let start = new_row(&mut data);
@@ -245,6 +246,7 @@ impl ConicForm {
             }
             let nrm = norm2(a).max(f64::MIN_POSITIVE);
             a.iter_mut().for_each(|v| *v /= nrm);
+            eq_norms.push(nrm);
             let mut bw = [0.0; 6];
             for (j, v) in bw.iter_mut().enumerate() {
                 *v = -model.eq_w[(i, j)] / nrm;
@@ -348,13 +350,19 @@ impl ConicForm {
         // (Independent rows from the core; a failed decomposition leaves the basis
         // out, and the certificate then fails rather than guess.)
         let (eq_null_t, eq_pinv) = if eq > 0 {
-            let e = Matrix::from_fn(eq, nx, |i, j| a[(i, j)]);
-            match decompose(&e, RankThreshold::Relative(1e-13)) {
-                Ok(d) => {
-                    let pinv = (d.rank() == eq).then(|| d.pseudo_inverse());
-                    (Some(d.null_basis.transpose()), pinv)
+            let norms: Vec<f64> = (0..eq).map(|i| eq_norms[i]).collect();
+            match factored_equalities(model, &col_scale, &norms) {
+                Some((nt, pinv)) => (Some(nt), Some(pinv)),
+                None => {
+                    let e = Matrix::from_fn(eq, nx, |i, j| a[(i, j)]);
+                    match decompose(&e, RankThreshold::Relative(1e-13)) {
+                        Ok(d) => {
+                            let pinv = (d.rank() == eq).then(|| d.pseudo_inverse());
+                            (Some(d.null_basis.transpose()), pinv)
+                        }
+                        Err(_) => (Some(Matrix::zeros(0, 0)), None),
+                    }
                 }
-                Err(_) => (Some(Matrix::zeros(0, 0)), None),
             }
         } else {
             (None, None)
@@ -703,6 +711,67 @@ impl ConicForm {
             passed: finite && primal <= tol && dual <= tol && stationarity <= tol && gap <= tol,
         }
     }
+}
+
+/// Where the torques' scales g (below) spread by more than [`ROW_SPREAD`], the null
+/// space of the equality rows and their pseudo-inverse from the model's factors,
+/// `C = Bᵀ diag(r)` (no decomposition of the rows): the form's rows are
+/// `E = diag(1/ν) Bᵀ diag(1/g)` on the torques, with ν their norms and `g = s / r`
+/// (s the torques' column scales), and zero on the free internal forces. So
+/// `null(E) = diag(g) range(N_B)` on the torques (with every free direction), and
+/// `x₀ = diag(g) B diag(ν) v` solves `E x = v`, whose least-norm solution is `x₀`
+/// less its part in the null space. Each row keeps its digits relative to its own
+/// g ([`orthonormal_columns`]): decomposed, E's columns span the spread of r (1e8
+/// where a joint's moment arms are 1e-8 of the others'), and the basis's rounding
+/// left a feasible grasp 1e-9 outside its circumscribed cones. `None` (the
+/// decomposition decides, accurate at a smaller spread) otherwise, where the factors
+/// do not fit, or where g is not finite and positive.
+fn factored_equalities(
+    model: &crate::GraspModel,
+    col_scale: &[f64],
+    norms: &[f64],
+) -> Option<(Matrix, Matrix)> {
+    let (b, nb, r) = (&model.eq_basis, &model.eq_null, &model.torque_scale);
+    let (m, p, d) = (model.joints(), norms.len(), model.free_dim());
+    if b.nrows() != m || b.ncols() != p || nb.nrows() != m || nb.ncols() + p != m || r.len() != m {
+        return None;
+    }
+    let g: Vec<f64> = (0..m).map(|j| col_scale[j] / r[j]).collect();
+    let (lo, hi) = g.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
+        (lo.min(v), hi.max(v))
+    });
+    if !(lo > 0.0 && hi.is_finite() && hi > ROW_SPREAD * lo) {
+        return None;
+    }
+    let k = m - p;
+    let null = if k > 0 {
+        orthonormal_columns(&Matrix::from_fn(m, k, |i, j| g[i] * nb[(i, j)]))?
+    } else {
+        Matrix::zeros(m, 0)
+    };
+    // x₀ = diag(g) B diag(ν), then less N Nᵀ x₀.
+    let mut pinv = Matrix::from_fn(m + d, p, |i, j| {
+        if i < m {
+            g[i] * b[(i, j)] * norms[j]
+        } else {
+            0.0
+        }
+    });
+    for j in 0..p {
+        let ntx: Vec<f64> = (0..k)
+            .map(|c| (0..m).map(|i| null[(i, c)] * pinv[(i, j)]).sum())
+            .collect();
+        for i in 0..m {
+            pinv[(i, j)] -= (0..k).map(|c| null[(i, c)] * ntx[c]).sum::<f64>();
+        }
+    }
+    // Nᵀ: the torques' basis, then each free direction.
+    let nt = Matrix::from_fn(k + d, m + d, |c, i| match (c < k, i < m) {
+        (true, true) => null[(i, c)],
+        (false, false) => f64::from(c - k == i - m),
+        _ => 0.0,
+    });
+    Some((nt, pinv))
 }
 
 /// `‖tail‖ − head` where positive, else 0: how far `(head, tail)` is outside its

@@ -381,6 +381,15 @@ fn explicit_q(w: &[f64], len: usize, k: usize, vhead: &[f64], tau: &[f64]) -> Ve
 /// Householder QR (backward stable: the basis is that of a matrix within rounding of
 /// `y`), when R shows full column rank clearly, `min |r_ii| > 1e-6 max |r_ii|`; `None`
 /// otherwise (and for a wide or non-finite `y`).
+///
+/// The explicit Q carries an error of ε in every entry. Where y's rows span more than
+/// [`ROW_SPREAD`] in norm, that buries the small rows (a joint whose moment arms are
+/// 1e-8 of the others', which the consistency equalities' null space pins to 1e-8 of
+/// their torques: products with the large columns of H that such a joint has left a
+/// feasible grasp 1e-9 short of its cones). There the basis is `y R⁻¹`, twice
+/// (`range_pass`): each of its rows is y's row times a k × k matrix, so it keeps its
+/// digits relative to its own size; the first pass is orthonormal to ε times R's
+/// condition, the second to ε.
 pub fn orthonormal_columns(y: &Matrix) -> Option<Matrix> {
     let (len, k) = (y.nrows(), y.ncols());
     let big = finite_max_abs(y.as_slice())?;
@@ -390,6 +399,13 @@ pub fn orthonormal_columns(y: &Matrix) -> Option<Matrix> {
     // The basis is that of any multiple of y.
     if let Some((scaled, ..)) = power_of_two_scaled(y, big, RankThreshold::Relative(0.0)) {
         return orthonormal_columns(&scaled);
+    }
+    let (lo, hi) = (0..len).fold((f64::INFINITY, 0.0f64), |(lo, hi), i| {
+        let r = crate::matrix::norm2(y.row(i));
+        (if r > 0.0 { lo.min(r) } else { lo }, hi.max(r))
+    });
+    if hi > ROW_SPREAD * lo {
+        return range_pass(&range_pass(y)?);
     }
     let mut w = longer_side(y);
     let (mut vhead, mut tau) = (vec![0.0; k], vec![0.0; k]);
@@ -413,6 +429,39 @@ pub fn orthonormal_columns(y: &Matrix) -> Option<Matrix> {
         }
     }
     Some(Matrix::from_fn(len, k, |i, j| q[j * len + i]))
+}
+
+/// The spread of row norms past which [`orthonormal_columns`] forms its basis row by
+/// row: Q's error of ε is then up to 1e-12 of a small row.
+pub const ROW_SPREAD: f64 = 1e4;
+
+/// `y R⁻¹` with R from the Householder QR of `y` (tall, finite), when R shows full
+/// column rank clearly ([`orthonormal_columns`]).
+fn range_pass(y: &Matrix) -> Option<Matrix> {
+    let (len, k) = (y.nrows(), y.ncols());
+    let mut w = longer_side(y);
+    let (mut vhead, mut tau) = (vec![0.0; k], vec![0.0; k]);
+    householder(&mut w, len, k, &mut vhead, &mut tau);
+    let r = |i: usize, j: usize| w[j * len + i];
+    let (lo, hi) = (0..k).fold((f64::INFINITY, 0.0f64), |(lo, hi), i| {
+        let d = r(i, i).abs();
+        (lo.min(d), hi.max(d))
+    });
+    if k > 0 && (lo.is_nan() || lo <= 1e-6 * hi) {
+        return None;
+    }
+    let rinv = upper_inverse(r, k);
+    let mut n = Matrix::zeros(len, k);
+    for i in 0..len {
+        let (yi, ni) = (y.row(i), n.row_mut(i));
+        // Row i of y R⁻¹: R⁻¹ is upper triangular, so column j sums l ≤ j.
+        for (l, &v) in yi.iter().enumerate() {
+            for (x, q) in ni[l..].iter_mut().zip(&rinv[l * k + l..(l + 1) * k]) {
+                *x += v * q;
+            }
+        }
+    }
+    Some(n)
 }
 
 /// The columns of the longer side of `a`, column-major: its columns, or its rows when
@@ -892,6 +941,46 @@ mod tests {
                         q0.map(|q| q.as_slice().to_vec())
                     );
                 }
+            }
+        }
+    }
+
+    /// A basis of `diag(g) N` with g spread over twelve decades: orthonormal to
+    /// rounding, and each row y_i = N_i R (R = Nᵀ y) to rounding relative to its own
+    /// size, the small ones too. An explicit Householder Q holds only
+    /// `‖y_i − Q_i R‖ ≤ ε ‖y‖`, which at a row 1e-12 of the largest is all of it.
+    #[test]
+    fn orthonormal_columns_keep_the_digits_of_small_rows() {
+        let mut next = uniform(5);
+        for (len, k) in [(9, 3), (16, 5), (20, 1), (12, 6)] {
+            // k rows of size 1 (R clearly of full rank), the rest down to 1e-12, the
+            // smallest first (Householder's Q keeps the digits of rows that come after
+            // the large ones, Cox and Higham 1998, not of those before).
+            let g: Vec<f64> = (0..len)
+                .map(|i: usize| {
+                    10f64.powi(-(((len - 1 - i).saturating_sub(k) * 12 / (len - k)) as i32))
+                })
+                .collect();
+            let y = Matrix::from_fn(len, k, |i, _| g[i] * next());
+            let q = orthonormal_columns(&y).unwrap();
+            assert_orthonormal(&q);
+            let r = q.transpose().matmul(&y);
+            for i in 0..len {
+                let back: Vec<f64> = (0..k)
+                    .map(|j| (0..k).map(|l| q[(i, l)] * r[(l, j)]).sum())
+                    .collect();
+                let err = crate::matrix::norm2(
+                    &back
+                        .iter()
+                        .zip(y.row(i))
+                        .map(|(a, b)| a - b)
+                        .collect::<Vec<_>>(),
+                );
+                let size = crate::matrix::norm2(y.row(i));
+                assert!(
+                    err <= 1e3 * f64::EPSILON * size,
+                    "{len}×{k} row {i}: {err:e} of {size:e}"
+                );
             }
         }
     }

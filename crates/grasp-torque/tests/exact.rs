@@ -331,6 +331,44 @@ fn a_joint_with_short_moment_arms_is_decided() {
     assert!(undecided[0] == 0 && undecided[1] <= 1, "{undecided:?}");
 }
 
+/// A contact pinned to its cone's apex beside joints whose moment arms are 1e-8 of
+/// others' (`fixtures/fuzz/pinned-contact.json`): joint 8's upper limit of 0 admits no
+/// force at the middle finger but zero, so the grasp is feasible with nothing to spare.
+/// The null space of the consistency equalities carried an error of ε in every entry,
+/// which its rows for the short-armed joints (1e-8 of the others) could not bear against
+/// their columns of H (1e9): in SI units the inscribed and the circumscribed polyhedra
+/// alike were called infeasible (two opposite rows 2e-10 apart), in other units
+/// optimal. Its rows now keep their own digits (`linalg::orthonormal_columns`), and the
+/// grasp is optimal in every unit, at σ* = 0.1645292523000 from the forces alone
+/// (`python3 scripts/oracle_file.py fixtures/fuzz/pinned-contact.json`: cvxpy and
+/// Clarabel at 1e-10).
+#[test]
+fn a_contact_pinned_beside_short_moment_arms_is_held() {
+    const ORACLE: f64 = 1.645292523000e-1;
+    let p = fixture("fuzz/pinned-contact");
+    for (l, f) in [
+        (1.0, 1.0),
+        (2.97e-3, 6.9e-2),
+        (1e-3, 1e3),
+        (1e3, 1e-3),
+        (1e2, 1e2),
+    ] {
+        let q = grasp_testkit::rescale(&p, l, f);
+        let back = (l * f) * (l * f);
+        let [lin, exact] = [Cones::Linear, Cones::Exact].map(|c| run(&q, Backend::ActiveSet, c));
+        let at = format!("lengths × {l:e}, forces × {f:e}");
+        assert_eq!(lin.status, Status::Optimal, "{at}: {:?}", lin.reason);
+        assert_eq!(exact.status, Status::Optimal, "{at}: {:?}", exact.reason);
+        // The oracle's tolerance, 1e-10, and the certificate's, 1e-9.
+        let sigma = exact.objective / back;
+        assert!(
+            rel(sigma, ORACLE) <= 1e-9,
+            "{at}: σ* {sigma} against {ORACLE}"
+        );
+        assert!(exact.objective <= lin.objective * (1.0 + 1e-9), "{at}");
+    }
+}
+
 /// Clarabel's infeasibility is reported only with a proof checked from scratch. On two
 /// grasps of a sweep beyond the ones here (seeds 30179 and 37476 at a quarter of the
 /// friction), Clarabel at its default tolerances stops after a few iterations with a
