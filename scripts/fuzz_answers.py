@@ -4,7 +4,7 @@ the problem file alone, and again in other units.
 
 Each seed takes one bundled problem in matrix form (`fixtures/*.json`,
 `fixtures/sweep/*.json`, and the geometry, hand and Table 1 problems through
-`grasp-torque build`, but those with a transmission or passive torques) and makes one
+`grasp-torque build`, transmissions and passive torques included) and makes one
 to three edits within the input domain: a row of Jᵀ scaled by 10^±9, made a multiple
 of another (×1, ×−1, ×(1 + 1e-12), ×1e-8) or reduced to one tiny entry; noise of
 1e-15 to 1e-8 on G or Jᵀ; the wrench scaled, zeroed or pushed along one component; a
@@ -12,7 +12,8 @@ friction coefficient or torsional length scaled; torque limits (symmetric, one-s
 tendons that only pull), a minimum normal force, torque weights 1e±4 apart; the
 Euclidean internal forces. It solves the problem with linear and exact cones and
 checks each `optimal` answer against the file, not the solver's diagnostics:
-- `G f = w` and `Jᵀ f = τ`, each row to 1e-7 of the normwise terms `‖row‖₁ ‖f‖∞ +
+- `G f = w` and `Jᵀ f = T u + τ_p` (τ = u without a transmission T or passive
+  torques τ_p), each row to 1e-7 of the normwise terms `‖row‖₁ ‖f‖∞ +
   |target|` of the largest row of its block (G's force rows, G's moment rows, Jᵀ): a
   row within the rank tolerance of its block's largest is rounding to the model, which
   sets it to 0;
@@ -39,7 +40,8 @@ friction; `fallbacks write`) with one joint's moment arms scaled by SCALE, the s
 checks on each optimal answer, and counts the statuses.
 
 Usage: python3 scripts/fuzz_answers.py FROM COUNT   (numpy; after `cargo build --release`
-and `cargo build --release -p grasp-torque --example fallbacks`)
+and `cargo build --release -p grasp-torque --example fallbacks`); another build of the
+binary (an older commit's, say) with GRASP_TORQUE_BIN=path/to/grasp-torque.
 """
 import glob
 import json
@@ -58,8 +60,8 @@ BIN = os.environ.get("GRASP_TORQUE_BIN") or os.path.join(ROOT, "target", "releas
 
 def sources():
     """(name, problem) for every matrix-form fixture, and for the geometry- and hand-form
-    ones in matrix form (`grasp-torque build`) but those with a transmission or
-    passive torques, whose `Jᵀ f = τ` the check could not read directly."""
+    ones in matrix form (`grasp-torque build`), transmissions and passive torques
+    included."""
     out = []
     for f in sorted(glob.glob(os.path.join(ROOT, "fixtures", "*.json")) + glob.glob(os.path.join(ROOT, "fixtures", "sweep", "*.json"))):
         p = json.load(open(f))
@@ -69,9 +71,7 @@ def sources():
         for f in sorted(glob.glob(os.path.join(ROOT, "fixtures", d, "*.json"))):
             built = subprocess.run([BIN, "build", f], capture_output=True, text=True)
             if built.returncode == 0:
-                p = json.loads(built.stdout)
-                if "transmission" not in p and "passive_torque" not in p:
-                    out.append((f"{d}/{os.path.basename(f)}", p))
+                out.append((f"{d}/{os.path.basename(f)}", json.loads(built.stdout)))
     return out
 
 
@@ -85,6 +85,8 @@ def mutate(rnd, p):
     JT = np.array(p["jacobian_transpose"], float)
     w = np.array(p["wrench"], float)
     m, n = JT.shape
+    # Limits and weights are per actuator where a transmission maps actuators to joints.
+    a = len(p["transmission"][0]) if p.get("transmission") else m
     contacts = [dict(c) for c in p["contacts"]]
     rng = np.random.default_rng(rnd.randrange(1 << 30))
     edits = []
@@ -126,7 +128,7 @@ def mutate(rnd, p):
             edits.append(f"contacts[{c}].mu_torsion")
         elif 0.76 <= r < 0.84:
             limits = []
-            for _ in range(m):
+            for _ in range(a):
                 x, s = rnd.random(), 10 ** rnd.uniform(-2, 3)
                 limits.append(None if x < 0.3 else s if x < 0.7 else [rnd.choice([None, -s]), rnd.choice([None, s, 0.0])])
             p["torque_limits"] = limits
@@ -136,7 +138,7 @@ def mutate(rnd, p):
             edits.append("minimum normal force")
         elif 0.9 <= r < 0.95:
             base = 10 ** rnd.uniform(-4, 4)
-            p["torque_weights"] = [base * 10 ** rnd.uniform(-2, 2) for _ in range(m)]
+            p["torque_weights"] = [base * 10 ** rnd.uniform(-2, 2) for _ in range(a)]
             edits.append("torque weights")
         elif r >= 0.95:
             p["internal_forces"] = rnd.choice(["euclidean", "compliance"])
@@ -166,6 +168,8 @@ def in_units(p, F, L):
     scale = lambda t: None if t is None else t * F * L
     if "torque_limits" in q:
         q["torque_limits"] = [[scale(x) for x in t] if isinstance(t, list) else scale(t) for t in q["torque_limits"]]
+    if "passive_torque" in q:
+        q["passive_torque"] = [v * F * L for v in q["passive_torque"]]
     if "min_normal_force" in q:
         fmin = q["min_normal_force"]
         q["min_normal_force"] = [v * F for v in fmin] if isinstance(fmin, list) else fmin * F
@@ -195,11 +199,15 @@ def wrong(p, d):
     G, JT, w = np.array(p["grasp_matrix"]), np.array(p["jacobian_transpose"]), np.array(p["wrench"])
     f = np.concatenate([np.atleast_1d(np.array(c, float)) for c in d["contact_forces"]])
     tau = np.array(d["torque"], float)
+    # Jᵀ f = T u + τ_p with a transmission T and passive torques τ_p (u: the answer's
+    # torques, per actuator).
+    joint = np.array(p["transmission"], float) @ tau if p.get("transmission") else tau
+    joint = joint + np.array(p.get("passive_torque") or np.zeros(len(joint)), float)
     if not (np.all(np.isfinite(f)) and np.all(np.isfinite(tau)) and math.isfinite(d["objective"])):
         return ["non-finite"]
     out = []
     fmax = np.abs(f).max()
-    for name, A, target in (("G f − w", G, w), ("Jᵀ f − τ", JT, tau)):
+    for name, A, target in (("G f − w", G, w), ("Jᵀ f − τ", JT, joint)):
         r = np.abs(A @ f - target)
         terms = np.abs(A).sum(axis=1) * fmax + np.abs(target)
         # Normwise over a block (the joints; G's force rows, its moment rows): a row

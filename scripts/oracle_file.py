@@ -55,9 +55,9 @@ def main():
         cons.append(fz >= lo)
         off += dim
     for j, lim in enumerate(p.get("torque_limits") or []):
-        if lim is not None:
-            lo, hi = lim if isinstance(lim, list) else (-lim, lim)
-            cons += [tau[j] >= lo, tau[j] <= hi]
+        lo, hi = lim if isinstance(lim, list) else (None, None) if lim is None else (-lim, lim)
+        cons += [tau[j] >= lo] if lo is not None else []
+        cons += [tau[j] <= hi] if hi is not None else []
     weights = np.array(p.get("torque_weights") or [1.0] * m, float)
     sigma = None
     for scale in (1.0, None):

@@ -457,9 +457,19 @@ impl Equalities {
         }
         // u0 = Cd⁺ e = −row_basis (row_transform eq_w) w: the small product first.
         let pu = dec.row_basis.matmul(&dec.row_transform.matmul(qp.eq_w));
+        let mut null_basis = dec.null_basis;
+        // A joint the model found pinned (a zero row of its null basis) has a row of
+        // rounding here: zero too, so that its torque limit is a fixed row.
+        if let Some(f) = qp.eq_factors.filter(|f| f.null.nrows() == m) {
+            for j in 0..m {
+                if f.null.row(j).iter().all(|v| *v == 0.0) {
+                    null_basis.row_mut(j).iter_mut().for_each(|v| *v = 0.0);
+                }
+            }
+        }
         Ok(Self {
             dinv,
-            null_basis: dec.null_basis,
+            null_basis,
             pu,
         })
     }

@@ -39,6 +39,8 @@ use grasp_core::conic::soc_excess;
 use grasp_core::matrix::{add_column_block, add_columns, column_major, norm_inf};
 use grasp_core::{ConeKind, ConicForm, Matrix};
 
+use grasp_core::conic::CERTIFICATE_TOLERANCE;
+
 /// Largest tail of a second-order cone (the friction cones' are 2 or 3 long).
 const MAX_TAIL: usize = crate::ipm::SOC_MAX - 1;
 /// Newton iterations per guess, and corrections of the guess.
@@ -808,12 +810,26 @@ impl Newton {
             d
         };
         let c = &self.b_red;
+        // A row that does not move with y (a torque the equalities pin, its limit at
+        // the torque they pin it to) holds within the certificate's tolerance of its
+        // terms as the certificate measures a torque limit's, `|b_i| + ‖a_i‖₁ ‖x_p‖∞`:
+        // the pinned torque comes out of the equalities with an error relative to the
+        // largest (a joint with moment arms 1e6 times the others' was 1e-10 past a
+        // limit of 0 that it meets exactly).
+        let (xp, nx) = (&self.xp[..form.nx], form.nx);
+        let xmax = norm_inf(xp);
+        let still = |i: usize| {
+            let a = &form.a.row(i)[..nx];
+            let b = c[i] + a.iter().zip(xp).map(|(a, x)| a * x).sum::<f64>();
+            let a1: f64 = a.iter().map(|v| v.abs()).sum();
+            CERTIFICATE_TOLERANCE * (b.abs() + a1 * xmax)
+        };
         // Each end of the intersection, and the piece that sets it.
         let (mut lo, mut hi) = ((f64::NEG_INFINITY, None), (f64::INFINITY, None));
         for i in self.orth.0..self.orth.1 {
             let d = slope(i);
             if d == 0.0 {
-                if c[i] < 0.0 {
+                if c[i] < -still(i) {
                     return false;
                 }
                 continue;
@@ -836,8 +852,9 @@ impl Newton {
             let (qa, qb, qc) = (d[0] * d[0] - dd, c[0] * d[0] - cd, c[0] * c[0] - cc);
             let size = d[0] * d[0] + dd;
             if size == 0.0 {
-                // The cone does not move with y.
-                if soc_excess(c[0], &c[1..]) > 0.0 {
+                // The cone does not move with y (a contact the equalities pin).
+                let tol = (start..start + dim).map(still).fold(0.0, f64::max);
+                if soc_excess(c[0], &c[1..]) > tol {
                     return false;
                 }
                 continue;

@@ -358,7 +358,18 @@ impl ConicForm {
                     match decompose(&e, RankThreshold::Relative(1e-13)) {
                         Ok(d) => {
                             let pinv = (d.rank() == eq).then(|| d.pseudo_inverse());
-                            (Some(d.null_basis.transpose()), pinv)
+                            let mut nt = d.null_basis.transpose();
+                            // A joint the model found pinned: its entries are rounding.
+                            if model.eq_null.nrows() == m && nt.ncols() == nx {
+                                for j in 0..m {
+                                    if model.eq_null.row(j).iter().all(|v| *v == 0.0) {
+                                        for c in 0..nt.nrows() {
+                                            nt[(c, j)] = 0.0;
+                                        }
+                                    }
+                                }
+                            }
+                            (Some(nt), pinv)
                         }
                         Err(_) => (Some(Matrix::zeros(0, 0)), None),
                     }

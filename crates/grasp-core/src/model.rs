@@ -456,6 +456,14 @@ fn flush_rows(
     }
 }
 
+/// Per joint: a row of the consistency equalities' null basis (orthonormal, in the
+/// equilibrated torques) at or below this times the joint count is rounding of a zero
+/// row, a joint whose torque the equalities pin ([`GraspModel::eq_null`]). Pinned
+/// joints' rows come out at 1e-17 to 1e-16; a thumb 1e11 m from the palm (its rows
+/// of Jᵀ 1e12 times the others') has rows of 7e-14 to 2e-13 that the weighting makes
+/// as large as the rest, so the bound stays below those.
+pub const PINNED: f64 = 10.0 * f64::EPSILON;
+
 /// Largest ratio between the norms of two rows of `[G; Jᵀ]` for which `euclidean`
 /// keeps the plain A⁺: beyond it, its rounding grows with the ratio. Real hands in SI
 /// units stay within about 100 (lever arms of centimetres against unit force rows).
@@ -709,7 +717,22 @@ impl GraspModel {
                         .map(|i| (0..p0).map(|c| dc.left_null[(c, i)] * pp[c]).sum::<f64>())
                         .collect();
                 }
-                (eq, eq_w, unreachable, dc.row_basis, dc.null_basis)
+                // A joint the equalities pin (its torque a function of the wrench) has a
+                // row of rounding in the null basis; it is zeroed, so that no method
+                // moves that torque along it. The rows are of an orthonormal basis, so
+                // the bound is absolute. Through `diag(g)` (the backends' weighted
+                // torques) such a row grows as g does, and a joint whose moment arms
+                // are 1e6 times the others' had a torque limit judged on a direction
+                // of 1e-11 (fuzz seed 2866: a feasible pinch called infeasible).
+                let mut null = dc.null_basis;
+                let pinned = PINNED * m as f64;
+                for j in 0..m {
+                    let row = null.row_mut(j);
+                    if crate::matrix::norm2(row) <= pinned {
+                        row.iter_mut().for_each(|v| *v = 0.0);
+                    }
+                }
+                (eq, eq_w, unreachable, dc.row_basis, null)
             }
         };
         let weights = p.torque_weights.clone().unwrap_or_else(|| vec![1.0; m]);

@@ -369,6 +369,50 @@ fn a_contact_pinned_beside_short_moment_arms_is_held() {
     }
 }
 
+/// A joint the consistency equalities pin at exactly its torque limit, with moment
+/// arms up to 1e6 times the others': the pinch's index roll (`fixtures/geometry/
+/// pinch.json`), whose torque is the index contact's fy times the arm, which the
+/// wrench fixes at 0, under an upper limit of 0 (fuzz seed 2866). The model's null
+/// basis of the equalities had a row of 2e-17 for it, which the backends' weighting
+/// grows with the arms: at 1e6 the limit was judged along a direction of 1e-11 as a
+/// row of the problem, not a fixed one, and the grasp was called infeasible, linear
+/// and exact (at 9.7e5, optimal at σ = 7.67, 8000 times σ*). The model now zeroes
+/// the row of a pinned joint (`model::PINNED`), and Newton's closed form takes a row
+/// that does not move along its line within the certificate's tolerance of a limit's
+/// terms (the pinned torque comes out of the equalities 1e-10 of the largest past the
+/// limit it meets exactly). Every arm and unit gives σ* = 9.604e-4, the pinch's
+/// without the limit, which its optimum meets at τ = 0. (At 1e7 the exact solve is
+/// `numerical_failure`, and at 1e8 the linear one: docs/solver.md, "Limits".)
+#[test]
+fn a_pinned_joint_at_its_limit_is_held_whatever_its_arms() {
+    let plain = run(
+        &fixture("geometry/pinch"),
+        Backend::ActiveSet,
+        Cones::Linear,
+    )
+    .objective;
+    for arm in [1e-3, 1.0, 1e3, 1e5, 9.678e5, 1e6] {
+        let mut p = fixture("geometry/pinch");
+        for v in p.jacobian_transpose.row_mut(5) {
+            *v *= arm;
+        }
+        let mut limits = vec![None; p.joints()];
+        limits[5] = Some(grasp_torque::TorqueLimit::Range(Some(-1.0), Some(0.0)));
+        p.torque_limits = Some(limits);
+        for (l, f) in [(1.0, 1.0), (1e-3, 1e3), (1e3, 1e-3), (0.288, 4.45e-3)] {
+            let q = grasp_testkit::rescale(&p, l, f);
+            let back = (l * f) * (l * f);
+            for cones in [Cones::Linear, Cones::Exact] {
+                let s = run(&q, Backend::ActiveSet, cones);
+                let at = format!("arm × {arm:e}, lengths × {l:e}, forces × {f:e}, {cones:?}");
+                assert_eq!(s.status, Status::Optimal, "{at}: {:?}", s.reason);
+                let sigma = s.objective / back;
+                assert!(rel(sigma, plain) <= 1e-9, "{at}: σ {sigma} against {plain}");
+            }
+        }
+    }
+}
+
 /// Clarabel's infeasibility is reported only with a proof checked from scratch. On two
 /// grasps of a sweep beyond the ones here (seeds 30179 and 37476 at a quarter of the
 /// friction), Clarabel at its default tolerances stops after a few iterations with a
