@@ -145,6 +145,10 @@ pub(crate) struct Newton {
     /// Each row's ℓ1 norm in `a_red`: `|a·dx| ≤ ‖a‖₁ ‖dx‖∞` bounds a slack's change
     /// without the product.
     a_red_l1: Vec<f64>,
+    /// Nonnegative rows constant on the equalities' solutions (a zero row of `a_red`:
+    /// a limit on a joint the wrench fixes). None is ever active: their slack is the
+    /// wrench's alone, checked once per solve ([`Self::still_rows_hold`]).
+    still: Vec<bool>,
     /// With at most one free direction, the rounding level of each row's `a_red`:
     /// a slope below it is no slope ([`Self::solve_line`]).
     line_floor: Vec<f64>,
@@ -288,6 +292,11 @@ impl Newton {
             a_red_l1: (0..rows)
                 .map(|i| a_red.row(i).iter().map(|v| v.abs()).sum())
                 .collect(),
+            still: (0..rows)
+                .map(|i| {
+                    (orth.0..orth.1).contains(&i) && k > 0 && a_red.row(i).iter().all(|v| *v == 0.0)
+                })
+                .collect(),
             a_red,
             line_floor,
             b_red: vec![0.0; rows],
@@ -353,6 +362,15 @@ impl Newton {
     /// magnitude α: the reduced problem's right-hand side.
     pub(crate) fn reduced_rhs(&mut self, w: &[f64; 6], alpha: f64) -> (&[f64], &[f64]) {
         self.set_wrench(w, alpha);
+        // A row that does not move with y is no constraint on y: at a slack of 0 (a
+        // pinned torque at its limit) it would hold the method's interior at its
+        // boundary, its multiplier growing without end. The method sees it slack by
+        // the problem's size (1, scaled), and the certificate reads the true one.
+        for i in self.orth.0..self.orth.1 {
+            if self.still[i] {
+                self.b_red[i] = self.b_red[i].max(1.0);
+            }
+        }
         (&self.xp, &self.b_red)
     }
 
@@ -425,7 +443,7 @@ impl Newton {
         let tol = ADOPT * norm_inf(&z[self.eq..]);
         let apex = APEX * norm_inf(&self.y).max(1.0);
         for i in self.orth.0..self.orth.1 {
-            self.active[i] = z[i] > tol;
+            self.active[i] = z[i] > tol && !self.still[i];
             self.nu_row[i] = if self.active[i] { z[i] } else { 0.0 };
         }
         for k in 0..self.socs.len() {
@@ -496,6 +514,9 @@ impl Newton {
             return false;
         }
         self.set_wrench(w, alpha);
+        if !self.still_rows_hold(form) {
+            return false;
+        }
         // y = Nᵀ x, unless hot: then y is the last answer's, rescaled with x.
         self.slacks_at_y = false;
         self.left_apex.iter_mut().for_each(|v| *v = false);
@@ -562,7 +583,7 @@ impl Newton {
             // The most violated inactive piece joins.
             let mut worst: Option<(f64, Owner)> = None;
             for i in self.orth.0..self.orth.1 {
-                if !self.active[i] && -self.s[i] > feas {
+                if !self.active[i] && !self.still[i] && -self.s[i] > feas {
                     let v = -self.s[i];
                     if worst.is_none_or(|(w, _)| v > w) {
                         worst = Some((v, Owner::Row(i)));
@@ -810,26 +831,15 @@ impl Newton {
             d
         };
         let c = &self.b_red;
-        // A row that does not move with y (a torque the equalities pin, its limit at
-        // the torque they pin it to) holds within the certificate's tolerance of its
-        // terms as the certificate measures a torque limit's, `|b_i| + ‖a_i‖₁ ‖x_p‖∞`:
-        // the pinned torque comes out of the equalities with an error relative to the
-        // largest (a joint with moment arms 1e6 times the others' was 1e-10 past a
-        // limit of 0 that it meets exactly).
-        let (xp, nx) = (&self.xp[..form.nx], form.nx);
-        let xmax = norm_inf(xp);
-        let still = |i: usize| {
-            let a = &form.a.row(i)[..nx];
-            let b = c[i] + a.iter().zip(xp).map(|(a, x)| a * x).sum::<f64>();
-            let a1: f64 = a.iter().map(|v| v.abs()).sum();
-            CERTIFICATE_TOLERANCE * (b.abs() + a1 * xmax)
-        };
+        // A row that does not move with y holds within its tolerance
+        // ([`Self::still_tolerance`]).
+        let still = |i: usize| self.still_tolerance(form, i);
         // Each end of the intersection, and the piece that sets it.
         let (mut lo, mut hi) = ((f64::NEG_INFINITY, None), (f64::INFINITY, None));
         for i in self.orth.0..self.orth.1 {
             let d = slope(i);
             if d == 0.0 {
-                if c[i] < -still(i) {
+                if c[i] < 0.0 && c[i] < -still(i) {
                     return false;
                 }
                 continue;
@@ -853,8 +863,8 @@ impl Newton {
             let size = d[0] * d[0] + dd;
             if size == 0.0 {
                 // The cone does not move with y (a contact the equalities pin).
-                let tol = (start..start + dim).map(still).fold(0.0, f64::max);
-                if soc_excess(c[0], &c[1..]) > tol {
+                let excess = soc_excess(c[0], &c[1..]);
+                if excess > 0.0 && excess > (start..start + dim).map(still).fold(0.0, f64::max) {
                     return false;
                 }
                 continue;
@@ -1206,6 +1216,29 @@ impl Newton {
         feasibility_tolerance_at(&self.y)
     }
 
+    /// How far past 0 the slack of row i may be when it does not move with y (a
+    /// torque the equalities pin, its limit at the torque they pin it to): the
+    /// certificate's tolerance of its terms as the certificate measures a torque
+    /// limit's, `|b_i| + ‖a_i‖₁ ‖x_p‖∞`. The pinned torque comes out of the
+    /// equalities with an error relative to the largest (a joint with moment arms 1e6
+    /// times the others' was 1e-10 past a limit of 0 that it meets exactly).
+    fn still_tolerance(&self, form: &ConicForm, i: usize) -> f64 {
+        let (xp, nx) = (&self.xp[..form.nx], form.nx);
+        let a = &form.a.row(i)[..nx];
+        let b = self.b_red[i] + a.iter().zip(xp).map(|(a, x)| a * x).sum::<f64>();
+        let a1: f64 = a.iter().map(|v| v.abs()).sum();
+        CERTIFICATE_TOLERANCE * (b.abs() + a1 * norm_inf(xp))
+    }
+
+    /// Whether every row that does not move with y holds at the current wrench
+    /// ([`Self::still_tolerance`]): where one does not, no y helps, and the methods
+    /// that prove infeasibility decide.
+    fn still_rows_hold(&self, form: &ConicForm) -> bool {
+        (self.orth.0..self.orth.1)
+            .filter(|&i| self.still[i])
+            .all(|i| self.b_red[i] >= 0.0 || self.b_red[i] >= -self.still_tolerance(form, i))
+    }
+
     /// A step along `dx` short enough that no boundary cone's slack crosses its apex
     /// (into −K): halved until `s0 + ‖s1‖`, the slack's distance from −K along the
     /// axis, keeps a tenth of its value at y. A force on its boundary near the apex,
@@ -1264,7 +1297,7 @@ impl Newton {
     fn worst_inactive(&self) -> f64 {
         let mut worst = 0.0f64;
         for i in self.orth.0..self.orth.1 {
-            if !self.active[i] {
+            if !self.active[i] && !self.still[i] {
                 worst = worst.max(-self.s[i]);
             }
         }

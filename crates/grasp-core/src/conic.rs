@@ -107,6 +107,12 @@ pub struct ConicForm {
     /// normal force touches few, and the certificate's passes over A run whole blocks.
     a_padded: Matrix,
     row_span: Vec<(usize, usize)>,
+    /// Per row: whether it is constant on the equalities' solutions (every nonzero
+    /// entry on a variable they pin, whose column of [`Self::eq_null_t`] is zero: a
+    /// limit on a joint the wrench fixes). Its slack is a function of the wrench alone
+    /// and any multiplier on it is absorbed by the equalities', so the certificate
+    /// reads none ([`Self::certificate`]).
+    fixed: Vec<bool>,
     /// `A`, `|A|` and `bw` column-major: the certificate's `b − A x` and the sizes of
     /// its terms `|A| |x|`, and `b(w)`, are passes down columns, which vectorise where
     /// a short row does not.
@@ -378,6 +384,21 @@ impl ConicForm {
         } else {
             (None, None)
         };
+        let fixed = match &eq_null_t {
+            Some(nt) if nt.ncols() == nx && eq > 0 => {
+                let pinned: Vec<bool> = (0..nx)
+                    .map(|j| (0..nt.nrows()).all(|r| nt[(r, j)] == 0.0))
+                    .collect();
+                (0..n)
+                    .map(|i| {
+                        i >= eq
+                            && a.row(i).iter().zip(&pinned).all(|(v, &p)| *v == 0.0 || p)
+                            && a.row(i).iter().any(|v| *v != 0.0)
+                    })
+                    .collect()
+            }
+            _ => vec![false; n],
+        };
         // A and |A| down columns, and A in rows padded to whole blocks of four.
         let mut a_cols: Vec<f64> = vec![0.0; n * nx];
         write_columns(&a, &mut a_cols, n);
@@ -404,6 +425,7 @@ impl ConicForm {
             eq_null_t,
             eq_pinv,
             row_span,
+            fixed,
             b0,
             bw: Matrix::from_rows_data(n, 6, bws.concat()),
             cones,
@@ -464,7 +486,7 @@ impl ConicForm {
         gsize: &mut [f64],
     ) -> (f64, bool) {
         let nx = self.nx;
-        for i in (eq..self.rows()).filter(|&i| z[i] != 0.0) {
+        for i in (eq..self.rows()).filter(|&i| z[i] != 0.0 && !self.fixed[i]) {
             let (lo, hi) = self.row_span[i];
             for ((g, gs), a) in grad[lo..hi]
                 .iter_mut()
@@ -476,6 +498,8 @@ impl ConicForm {
                 *gs += t.abs();
             }
         }
+        // (A fixed row's terms are left out above: a multiplier of 1e18 there, which
+        // the equalities absorb, made every other column's residual look small.)
         let colsize = gsize.iter().fold(f64::MIN_POSITIVE, |a, v| fmax(a, *v));
         let (residual, basis_ok) = match &self.eq_null_t {
             None => (grad.iter().fold(0.0f64, |a, g| fmax(a, g.abs())), true),
@@ -627,7 +651,16 @@ impl ConicForm {
         };
         // zscale, sᵀz and Σ |b_i z_i| over the inequality rows in one pass.
         let (mut zscale, mut sz, mut bz_size) = (f64::MIN_POSITIVE, 0.0, 0.0);
-        for ((bi, si), zi) in b.iter().zip(s.iter()).zip(z).skip(eq) {
+        // (A fixed row's multiplier is not read: a point 1000 times the optimal σ
+        // passed on a multiplier of 1e18 there, its b·z swamping the gap's terms.)
+        for (((bi, si), zi), _) in b
+            .iter()
+            .zip(s.iter())
+            .zip(z)
+            .zip(&self.fixed)
+            .skip(eq)
+            .filter(|(_, &f)| !f)
+        {
             zscale = fmax(zscale, zi.abs());
             sz += si * zi;
             bz_size += (bi * zi).abs();
@@ -647,13 +680,17 @@ impl ConicForm {
                         if !self.limit_rows.contains(&i) {
                             primal = fmax(primal, -s[i]);
                         }
-                        dual = fmax(dual, -z[i]);
+                        if !self.fixed[i] {
+                            dual = fmax(dual, -z[i]);
+                        }
                     }
                 }
                 ConeKind::SecondOrder(_) => {
                     let (h, t) = (r.start, r.start + 1..r.end);
                     primal = fmax(primal, soc_excess(s[h], &s[t.clone()]));
-                    dual = fmax(dual, soc_excess(z[h], &z[t]));
+                    if !self.fixed[h] {
+                        dual = fmax(dual, soc_excess(z[h], &z[t]));
+                    }
                 }
             }
             start += cone.dim();

@@ -428,7 +428,14 @@ pub fn orthonormal_columns(y: &Matrix) -> Option<Matrix> {
             reflect(vhead[c], v, tau[c], &mut q[c * len..], len, c);
         }
     }
-    Some(Matrix::from_fn(len, k, |i, j| q[j * len + i]))
+    // A zero row of y is one of the range: exactly (Q's would be rounding).
+    Some(Matrix::from_fn(len, k, |i, j| {
+        if y.row(i).iter().all(|v| *v == 0.0) {
+            0.0
+        } else {
+            q[j * len + i]
+        }
+    }))
 }
 
 /// The spread of row norms past which [`orthonormal_columns`] forms its basis row by

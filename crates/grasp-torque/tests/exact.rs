@@ -413,6 +413,69 @@ fn a_pinned_joint_at_its_limit_is_held_whatever_its_arms() {
     }
 }
 
+/// A joint whose row of Jᵀ is a combination of G's, `s cᵀ G` (so that the equalities
+/// pin its torque to `s c·w`), with one side of its range exactly there: every
+/// admissible torque meets that limit, so the answer is the one without it. On 100
+/// sweep grasps per friction, the arm's scale s over 1e-3 to 1e6: the same status and
+/// σ to 1e-8, linear and exact. A scripted search (random c, s and side on the sweep's
+/// grasps) found 10 of 100 answered otherwise before: infeasible, or `optimal` at up
+/// to 1300 times σ, the exact method's certificate fooled by a multiplier of 1e18 on
+/// the limit's row, which the equalities absorb. Now the certificate reads no
+/// multiplier on a row the equalities make constant, Newton never takes one in, and
+/// the interior-point method sees it slack (`ConicForm::fixed`, `Newton::still`).
+#[test]
+fn a_limit_at_a_pinned_torque_changes_no_answer() {
+    let mut rng = grasp_testkit::Rng(2866);
+    for (friction, seeds) in [(1.0, 200..300u64), (0.25, 200..300u64)] {
+        for seed in seeds {
+            let mut p = grasp(seed, friction);
+            let m = p.joints();
+            let j = rng.int(0, m - 1);
+            let c: Vec<f64> = (0..6)
+                .map(|_| {
+                    if rng.uniform(0.0, 1.0) < 0.5 {
+                        rng.uniform(-1.0, 1.0)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            let scale = 10f64.powf(rng.uniform(-3.0, 6.0));
+            for k in 0..p.force_dim() {
+                p.jacobian_transpose[(j, k)] =
+                    scale * (0..6).map(|i| c[i] * p.grasp_matrix[(i, k)]).sum::<f64>();
+            }
+            let pinned = scale * (0..6).map(|i| c[i] * p.wrench[i]).sum::<f64>();
+            let span = 10.0 * pinned.abs() + 1.0;
+            let mut q = p.clone();
+            let mut limits = vec![None; m];
+            limits[j] = Some(if rng.uniform(0.0, 1.0) < 0.5 {
+                grasp_torque::TorqueLimit::Range(Some(pinned - span), Some(pinned))
+            } else {
+                grasp_torque::TorqueLimit::Range(Some(pinned), Some(pinned + span))
+            });
+            q.torque_limits = Some(limits);
+            for cones in [Cones::Linear, Cones::Exact] {
+                let (free, held) = (
+                    run(&p, Backend::ActiveSet, cones),
+                    run(&q, Backend::ActiveSet, cones),
+                );
+                let at =
+                    format!("seed {seed} friction {friction}, joint {j} × {scale:e}, {cones:?}");
+                assert_eq!(held.status, free.status, "{at}: {:?}", held.reason);
+                if free.status == Status::Optimal {
+                    assert!(
+                        rel(held.objective, free.objective) <= 1e-8,
+                        "{at}: σ {} against {}",
+                        held.objective,
+                        free.objective
+                    );
+                }
+            }
+        }
+    }
+}
+
 /// Clarabel's infeasibility is reported only with a proof checked from scratch. On two
 /// grasps of a sweep beyond the ones here (seeds 30179 and 37476 at a quarter of the
 /// friction), Clarabel at its default tolerances stops after a few iterations with a
