@@ -109,9 +109,10 @@ pub struct ConicForm {
     row_span: Vec<(usize, usize)>,
     /// Per row: whether it is constant on the equalities' solutions (every nonzero
     /// entry on a variable they pin, whose column of [`Self::eq_null_t`] is zero: a
-    /// limit on a joint the wrench fixes). Its slack is a function of the wrench alone
-    /// and any multiplier on it is absorbed by the equalities', so the certificate
-    /// reads none ([`Self::certificate`]).
+    /// limit on a joint the wrench fixes), a row of the nonnegative cone or a whole
+    /// second-order cone. Its slack is a function of the wrench alone and any
+    /// multiplier on it is absorbed by the equalities', so the certificate reads none
+    /// ([`Self::certificate`]).
     fixed: Vec<bool>,
     /// `A`, `|A|` and `bw` column-major: the certificate's `b − A x` and the sizes of
     /// its terms `|A| |x|`, and `b(w)`, are passes down columns, which vectorise where
@@ -389,13 +390,29 @@ impl ConicForm {
                 let pinned: Vec<bool> = (0..nx)
                     .map(|j| (0..nt.nrows()).all(|r| nt[(r, j)] == 0.0))
                     .collect();
-                (0..n)
-                    .map(|i| {
-                        i >= eq
-                            && a.row(i).iter().zip(&pinned).all(|(v, &p)| *v == 0.0 || p)
-                            && a.row(i).iter().any(|v| *v != 0.0)
-                    })
-                    .collect()
+                let constant = |i: usize| {
+                    a.row(i).iter().zip(&pinned).all(|(v, &p)| *v == 0.0 || p)
+                        && a.row(i).iter().any(|v| *v != 0.0)
+                };
+                // A row of the nonnegative cone on its own; a second-order cone only
+                // whole (one constant row of a cone, a force component the wrench
+                // fixes, still carries the cone's multiplier).
+                let mut fixed = vec![false; n];
+                let mut start = 0;
+                for cone in &cones {
+                    let r = start..start + cone.dim();
+                    match cone {
+                        ConeKind::Zero(_) => {}
+                        ConeKind::Nonnegative(_) => r.for_each(|i| fixed[i] = constant(i)),
+                        ConeKind::SecondOrder(_) => {
+                            if r.clone().all(constant) {
+                                r.for_each(|i| fixed[i] = true);
+                            }
+                        }
+                    }
+                    start += cone.dim();
+                }
+                fixed
             }
             _ => vec![false; n],
         };

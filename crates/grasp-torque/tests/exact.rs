@@ -413,6 +413,63 @@ fn a_pinned_joint_at_its_limit_is_held_whatever_its_arms() {
     }
 }
 
+/// The pinch's roll joints, which the equalities pin, at torques other than 0 (a
+/// wrench with a sideways force or a twist): one constant row of a second-order cone
+/// (a contact's fy, which the wrench fixes) still carries the cone's multiplier. A
+/// certificate that dropped it as it drops a constant limit row failed every such
+/// answer on its duality gap (0.84), found by `fuzz_answers.py` (seed 3105).
+#[test]
+fn pinned_torques_off_zero_are_certified() {
+    for (fy, mz) in [(0.0, 0.5), (1.0, 0.0), (-0.7, -0.3), (0.2, 2.0)] {
+        let mut p = fixture("geometry/pinch");
+        p.wrench[1] += fy;
+        p.wrench[5] += mz;
+        let exact = run(&p, Backend::ActiveSet, Cones::Exact);
+        let at = format!("fy {fy}, mz {mz}");
+        assert_eq!(exact.status, Status::Optimal, "{at}: {:?}", exact.reason);
+        let lin = run(&p, Backend::ActiveSet, Cones::Linear);
+        assert!(
+            lin.status != Status::Optimal || exact.objective <= lin.objective * (1.0 + 1e-9),
+            "{at}"
+        );
+        #[cfg(feature = "clarabel")]
+        {
+            let c = run(&p, Backend::Clarabel, Cones::Exact);
+            assert_eq!(c.status, Status::Optimal, "{at}: {:?}", c.reason);
+            assert!(
+                rel(exact.objective, c.objective) <= 1e-7,
+                "{at}: {} against Clarabel's {}",
+                exact.objective,
+                c.objective
+            );
+        }
+    }
+}
+
+/// `fixtures/fuzz/long-and-short-arms.json` (fuzz seed 3197): the paper example with
+/// joint 0's arms 10834 times its own and joint 3's one entry of 1e-8. It is held only
+/// with joint 0's torque about 5e4 times the others', each contact's force on its
+/// exact cone's boundary, at σ* = 2.7366e9: cvxpy (Clarabel) on τ with the paper's
+/// `A⁺` and the exact cones, from the file alone, gives 2736638060.93, as accurate as
+/// a problem this scaled allows (4e-9). At 06e2229 the exact cones were called
+/// infeasible (the circumscribed polyhedra, by a face taken for one no torque
+/// moves); Newton's closed form now takes a row whose slope along its line is
+/// rounding as holding within the certificate's tolerance of its terms, and the
+/// certificate passes its answer. (The
+/// inscribed polyhedra do not hold it, nor Clarabel's exact cones, by a ray that
+/// excludes only torques within some multiple of the load.)
+#[test]
+fn a_grasp_held_only_by_a_long_arm_is_held() {
+    let p = fixture("fuzz/long-and-short-arms");
+    let s = run(&p, Backend::ActiveSet, Cones::Exact);
+    assert_eq!(s.status, Status::Optimal, "{:?}", s.reason);
+    assert!(
+        rel(s.objective, 2736638060.93) <= 1e-8,
+        "σ* {}",
+        s.objective
+    );
+}
+
 /// A joint whose row of Jᵀ is a combination of G's, `s cᵀ G` (so that the equalities
 /// pin its torque to `s c·w`), with one side of its range exactly there: every
 /// admissible torque meets that limit, so the answer is the one without it. On 100
