@@ -35,11 +35,9 @@
 //! factorisation: a control loop pays O((k + nc)²) per iteration.
 
 use crate::dense::{backward, cholesky, dot4, forward, schur};
-use grasp_core::conic::soc_excess;
+use grasp_core::conic::{soc_excess, CERTIFICATE_TOLERANCE};
 use grasp_core::matrix::{add_column_block, add_columns, column_major, norm_inf};
 use grasp_core::{ConeKind, ConicForm, Matrix};
-
-use grasp_core::conic::CERTIFICATE_TOLERANCE;
 
 /// Largest tail of a second-order cone (the friction cones' are 2 or 3 long).
 const MAX_TAIL: usize = crate::ipm::SOC_MAX - 1;
