@@ -32,6 +32,13 @@ seen so far come from a row of Jᵀ far from the others' size, a joint whose mom
 arms are 1e-6 to 1e-9 of the others' or as many times larger, or a singular value of
 [G; Jᵀ] within a factor of 10 of the rank tolerance; docs/solver.md, "Limits").
 
+`fuzz_answers.py pinned-limits FROM COUNT` makes one joint of each of the sweep's
+grasps one whose torque the wrench fixes (its row of Jᵀ a multiple of a combination
+of G's rows), with one side of its limit exactly at that torque, and checks that the
+answer is the one without the limit, in any units. `fuzz_answers.py statuses FROM
+COUNT OTHER_BIN` lists the seeds of the main search whose status differs between this
+binary and OTHER_BIN.
+
 `fuzz_answers.py joint-units FROM COUNT` solves the sweep's grasps with each joint's
 torque in its own unit (Jᵀ's row times s_j, 10^U(−2, 2), the weight 1/s_j²) and
 compares status and σ with the SI answer. `fuzz_answers.py moment-arms SCALE FROM
@@ -300,11 +307,80 @@ def moment_arms(scale, start, count):
     sys.exit(1 if problems else 0)
 
 
+def pinned_limits(start, count):
+    """The sweep's grasps, each with one joint's row of Jᵀ made `s cᵀ G` (so that the
+    equalities pin its torque to `s c·w`; c random, s 10^U(−3, 6)) and one side of its
+    limit exactly there: every admissible torque meets the limit, so the status and σ
+    must be the problem's without it, and the same in other units."""
+    counts, problems = {}, 0
+    for seed, friction, p in sweep_grasps(start, count):
+        rnd = random.Random(f"{seed}:{friction}")
+        G, JT, w = np.array(p["grasp_matrix"]), np.array(p["jacobian_transpose"]), np.array(p["wrench"])
+        j = rnd.randrange(len(JT))
+        c = np.array([rnd.gauss(0, 1) if rnd.random() < 0.5 else 0.0 for _ in range(6)])
+        if not c.any():
+            c[rnd.randrange(6)] = 1.0
+        scale = 10 ** rnd.uniform(-3, 6)
+        JT[j] = scale * (c @ G)
+        pinned = float(scale * (c @ w))
+        p["jacobian_transpose"] = JT.tolist()
+        q = json.loads(json.dumps(p))
+        span = 10 * abs(pinned) + 1.0
+        q["torque_limits"] = [None] * len(JT)
+        q["torque_limits"][j] = [pinned - span, pinned] if rnd.random() < 0.5 else [pinned, pinned + span]
+        F, L = 10 ** rnd.uniform(-3, 3), 10 ** rnd.uniform(-3, 3)
+        for cones in ("linear", "exact"):
+            (a, _), (b, _), (u, _) = solve(p, cones), solve(q, cones), solve(in_units(q, F, L), cones)
+            # (None: the other units left the input domain.)
+            u = u or {"status": None}
+            counts[(cones, b["status"])] = counts.get((cones, b["status"]), 0) + 1
+            at = f"seed {seed}:{friction} {cones} (joint {j} × {scale:.2g})"
+            decisive = ("optimal", "infeasible")
+            if a["status"] in decisive and b["status"] != a["status"]:
+                print(f"{at}: {a['status']} without the limit, {b['status']} with it")
+                problems += 1
+            elif a["status"] == b["status"] == "optimal" and abs(a["objective"] - b["objective"]) > 1e-8 * a["objective"]:
+                print(f"{at}: σ {a['objective']} without the limit, {b['objective']} with it")
+                problems += 1
+            if b["status"] in decisive and u["status"] in decisive and b["status"] != u["status"]:
+                print(f"{at}: {b['status']} in SI units, {u['status']} in others")
+                problems += 1
+    print(f"a limit at a pinned torque, {2 * count} grasps: {problems} wrong answers; statuses {dict(sorted(counts.items()))}")
+    sys.exit(1 if problems else 0)
+
+
+def statuses(start, count, other):
+    """Seeds FROM.. of the main search solved by this binary and by `other` (an older
+    commit's, say): each status that differs, linear and exact."""
+    bundled, changed = sources(), 0
+    global BIN
+    for seed in range(start, start + count):
+        rnd = random.Random(seed)
+        name, p = rnd.choice(bundled)
+        p = json.loads(json.dumps(p))
+        edits = mutate(rnd, p)
+        for cones in ("linear", "exact"):
+            here = solve(p, cones)[0]
+            BIN, mine = other, BIN
+            there = solve(p, cones)[0]
+            BIN = mine
+            a, b = (there or {}).get("status"), (here or {}).get("status")
+            if a != b:
+                print(f"seed {seed} ({name}: {', '.join(edits)}) {cones}: {a} there, {b} here")
+                changed += 1
+    print(f"{count} problems: {changed} statuses differ")
+
+
 def main():
     if sys.argv[1] == "moment-arms":
         moment_arms(float(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]))
     if sys.argv[1] == "joint-units":
         joint_units(int(sys.argv[2]), int(sys.argv[3]))
+    if sys.argv[1] == "pinned-limits":
+        pinned_limits(int(sys.argv[2]), int(sys.argv[3]))
+    if sys.argv[1] == "statuses":
+        statuses(int(sys.argv[2]), int(sys.argv[3]), sys.argv[4])
+        sys.exit(0)
     start, count = int(sys.argv[1]), int(sys.argv[2])
     problems, counts = 0, {}
     bundled = sources()
