@@ -26,11 +26,14 @@ checks each `optimal` answer against the file, not the solver's diagnostics:
   mu_torsion L, torques F L), unless the problem uses the Euclidean internal forces or
   the paper's SFCe latitudes, which are not unit-free by design (README, "Problem
   files"), or the other units leave the input domain.
-It reports each failure of these, each run that exits other than 0, 2, 3 or 4, and
-each `numerical_failure` or `iteration_limit` (not a wrong answer, but no answer: all
-seen so far come from a row of Jᵀ far from the others' size, a joint whose moment
-arms are 1e-6 to 1e-9 of the others' or as many times larger, or a singular value of
-[G; Jᵀ] within a factor of 10 of the rank tolerance; docs/solver.md, "Limits").
+It also checks that the report agrees with the status: every check's ratio
+(`diagnostics.*_check`) at most 1 on an `optimal` answer, one above 1 on an answer the
+residual check refused. It reports each failure of these, each run that exits other
+than 0, 2, 3 or 4, and each `numerical_failure` or `iteration_limit` (not a wrong
+answer, but no answer: all seen so far come from a row of Jᵀ far from the others'
+size, a joint whose moment arms are 1e-6 to 1e-9 of the others' or as many times
+larger, or a singular value of [G; Jᵀ] within a factor of 10 of the rank tolerance;
+docs/solver.md, "Limits").
 
 `fuzz_answers.py pinned-limits FROM COUNT` makes one joint of each of the sweep's
 grasps one whose torque the wrench fixes (its row of Jᵀ a multiple of a combination
@@ -253,6 +256,24 @@ def wrong(p, d):
     return out
 
 
+CHECKS = ("wrench_check", "torque_check", "violation_check", "cone_check")
+
+
+def misreported(d):
+    """Where the report contradicts the status: each check's ratio is its worst row
+    against that row's bound, so an optimal answer has all of them at most 1 and one
+    refused by the residual check has one above 1."""
+    ratios = {k: (d.get("diagnostics") or {}).get(k) for k in CHECKS}
+    if any(v is None for v in ratios.values()):
+        return []
+    worst = max(ratios.values())
+    if d["status"] == "optimal" and worst > 1:
+        return [f"a check's ratio is {worst:.3g} ({ratios})"]
+    if (d.get("reason") or {}).get("kind") == "residual_check" and not worst > 1:
+        return [f"refused by the residual check with every ratio at most 1 ({ratios})"]
+    return []
+
+
 def sweep_grasps(start, count):
     """The sweep's grasps (`fallbacks write SEED:FRICTION`), seeds FROM.. at normal and
     at a quarter of the friction."""
@@ -408,6 +429,9 @@ def main():
                     problems += 1
             elif d["status"] != "infeasible":
                 print(f"{at} {cones}: {d['status']} ({(d.get('reason') or {}).get('message', '')[:160]})")
+            for what in misreported(d):
+                print(f"{at} {cones}: {d['status']}, but {what}")
+                problems += 1
             if unit_free:
                 e, why = solve(in_units(p, F, L), cones)
                 decisive = ("optimal", "infeasible")

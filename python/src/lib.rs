@@ -276,6 +276,10 @@ struct Checks {
     check_tolerance: f64,
     wrench_check: f64,
     torque_check: f64,
+    #[serde(default)]
+    violation_check: f64,
+    #[serde(default)]
+    cone_check: f64,
 }
 
 /// Everything a Python result holds; serialisable, so results pickle.
@@ -350,6 +354,8 @@ impl SolveResult {
                     check_tolerance: d.check_tolerance,
                     wrench_check: d.wrench_check,
                     torque_check: d.torque_check,
+                    violation_check: d.violation_check,
+                    cone_check: d.cone_check,
                 },
                 joint_names: names(p),
                 joint_torque: (ok && !s.joint_torque.is_empty()).then(|| s.joint_torque.clone()),

@@ -43,7 +43,8 @@ def test_bundled_fixtures_match_the_cli(cli, path):
     if r.joint_names is not None:
         assert r.joint_names == expected["joint_names"]
     assert r.residuals["wrench"] <= 1e-9 * max(1.0, np.abs(gt.Problem.load(path).wrench).max())
-    assert r.diagnostics["wrench_check"] <= 1.0
+    for check in ("wrench_check", "torque_check", "violation_check", "cone_check"):
+        assert 0.0 <= r.diagnostics[check] <= 1.0
     assert sum(r.contact_dims) == len(r.contact_forces)
     assert len(r.forces_per_contact) == len(r.contact_dims)
 

@@ -501,13 +501,12 @@ forces on the object (object frame) {:>11} {:>11} {:>11}",
             g(d.consistency_residual, 3)
         );
     }
-    // Violations are judged against the check's tolerance of the largest force.
-    let vtol = 10.0 * d.check_tolerance * fmax;
-    let verdict = |v: f64| {
-        if v <= vtol {
-            format!("within {}", g(vtol, 2))
+    // Each verdict is the check's own: the worst row against the bound it was judged by.
+    let verdict = |ratio: f64| {
+        if ratio <= 1.0 {
+            format!("{} of the tolerance", share(ratio))
         } else {
-            format!("VIOLATED beyond {}", g(vtol, 2))
+            format!("VIOLATED: {}× the tolerance", g(ratio, 2))
         }
     };
     if qp.constraints.has_exact() {
@@ -515,20 +514,20 @@ forces on the object (object frame) {:>11} {:>11} {:>11}",
             o,
             "  max(g − fz) {:>10}   (exact cones, g the cone's gauge, ≤ 0 inside: {})",
             g(d.cone_violation, 3),
-            verdict(d.cone_violation)
+            verdict(d.cone_check)
         );
         let _ = writeln!(
             o,
             "  max(c − Hτ) {:>10}   (minimum normal forces and torque limits: {})",
             g(d.max_violation, 3),
-            verdict(d.max_violation)
+            verdict(d.violation_check)
         );
     } else {
         let _ = writeln!(
             o,
             "  max(c − Hτ) {:>10}   (inscribed cones, minimum normal forces, torque limits: {})",
             g(d.max_violation, 3),
-            verdict(d.max_violation)
+            verdict(d.violation_check)
         );
     }
     let _ = writeln!(o, "\niterations  {}", s.iterations);

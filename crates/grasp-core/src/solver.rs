@@ -198,6 +198,12 @@ pub struct Diagnostics {
     pub wrench_check: f64,
     /// The same for `Jᵀ f = τ`.
     pub torque_check: f64,
+    /// The same for the linear rows (`c − H τ`: inscribed faces and minimum normal
+    /// forces) and the torque limits: the largest violation as a fraction of its row's
+    /// bound. At most 1 passes; 0 when nothing is violated.
+    pub violation_check: f64,
+    /// The same for the exact cones (`g(f) − fz`).
+    pub cone_check: f64,
 }
 
 /// Rows of the residual check formed at a time, on the stack.
@@ -226,10 +232,19 @@ impl WorstRatio {
     }
 }
 
+/// The linear rows' violations so far: the largest, the worst against the bound it
+/// was judged by, and the largest of those within the bound `tol F` that the rows with
+/// `c0 = 0` (all but each contact's normal) share, kept apart: one maximum per row.
+struct RowViolations {
+    worst: f64,
+    ratio: WorstRatio,
+    passed: f64,
+}
+
 /// One contact's rows `c0_k − s_k · f_c ≤ 0` (faces of `D` components, row-major):
-/// raises `viol` to the worst and returns whether a row fails at `tol`. At these
-/// lengths a general dot product costs several times the arithmetic, hence `D` fixed.
-/// A row over the cheap bound `tol (|c0| + F)` pays for its own terms `Σ |s f|`.
+/// adds them to `viol` and returns whether a row fails at `tol`. At these lengths a
+/// general dot product costs several times the arithmetic, hence `D` fixed. A row over
+/// the cheap bound `tol (|c0| + F)` pays for its own terms `Σ |s f|`.
 #[inline(always)]
 fn cone_rows<const D: usize>(
     faces: &[f64],
@@ -237,27 +252,44 @@ fn cone_rows<const D: usize>(
     fmin: f64,
     tol: f64,
     fscale: f64,
-    viol: &mut f64,
+    viol: &mut RowViolations,
 ) -> bool {
     let fc: &[f64; D] = fc
         .try_into()
         .expect("contact force of its model's dimension");
-    let mut bad = false;
-    let rows = faces.len() / D;
-    // Every row's constant is 0 but the last's (the normal's): fz ≥ f_min.
-    for (k, s) in faces.chunks_exact(D).enumerate() {
-        let c = if k + 1 == rows { fmin } else { 0.0 };
-        let sf = if D == 4 {
+    let dot = |s: &[f64]| -> f64 {
+        if D == 4 {
             (s[0] * fc[0] + s[1] * fc[1]) + (s[2] * fc[2] + s[3] * fc[3])
         } else {
             (0..D).map(|k| s[k] * fc[k]).sum()
-        };
-        let v = c - sf;
-        *viol = viol.max(v);
-        let cheap = tol * (c.abs() + fscale);
+        }
+    };
+    let terms = |s: &[f64]| -> f64 { (0..D).map(|k| (s[k] * fc[k]).abs()).sum() };
+    let mut bad = false;
+    // Every row's constant is 0 but the last's (the normal's): fz ≥ f_min.
+    let (body, last) = faces.split_at(faces.len().saturating_sub(D));
+    let cheap = tol * fscale;
+    for s in body.chunks_exact(D) {
+        let v = -dot(s);
+        viol.worst = viol.worst.max(v);
         if exceeds(v, cheap) {
-            let terms: f64 = (0..D).map(|k| (s[k] * fc[k]).abs()).sum();
-            bad |= exceeds(v, cheap + tol * terms);
+            let bound = cheap + tol * terms(s);
+            bad |= exceeds(v, bound);
+            viol.ratio.add(v, bound);
+        } else {
+            viol.passed = viol.passed.max(v);
+        }
+    }
+    if last.len() == D {
+        let v = fmin - dot(last);
+        viol.worst = viol.worst.max(v);
+        let cheap = tol * (fmin.abs() + fscale);
+        if exceeds(v, cheap) {
+            let bound = cheap + tol * terms(last);
+            bad |= exceeds(v, bound);
+            viol.ratio.add(v, bound);
+        } else if v > 0.0 {
+            viol.ratio.add(v, cheap);
         }
     }
     bad
@@ -627,6 +659,8 @@ impl Diagnostics {
         self.check_tolerance = 0.0;
         self.wrench_check = 0.0;
         self.torque_check = 0.0;
+        self.violation_check = 0.0;
+        self.cone_check = 0.0;
     }
 }
 
@@ -650,7 +684,7 @@ impl TorqueQp {
     /// (TorqueQp::new) are violated by `lower − τ_j` and `τ_j − upper`. Each τ_j comes
     /// out of the solver's linear algebra with an error relative to the largest torque,
     /// which joins the terms: a bound at 0 (a tendon that only pulls) has no other.
-    fn limit_violation(&self, tau: &[f64], tol: f64) -> (f64, bool) {
+    fn limit_violation(&self, tau: &[f64], tol: f64, ratio: &mut WorstRatio) -> (f64, bool) {
         // (An open side is infinite: never violated, its bound infinite. A NaN torque
         // is the caller's finiteness check's.)
         let mut viol = f64::NEG_INFINITY;
@@ -661,11 +695,20 @@ impl TorqueQp {
             return (viol, false);
         }
         let scale = norm_inf(tau);
-        let bad = self.limits().iter().any(|&(j, lo, hi)| {
+        let mut bad = false;
+        for &(j, lo, hi) in self.limits() {
             let t = tau[j];
             let terms = t.abs() + scale;
-            exceeds(lo - t, tol * (lo.abs() + terms)) || exceeds(t - hi, tol * (hi.abs() + terms))
-        });
+            for (v, bound) in [
+                (lo - t, tol * (lo.abs() + terms)),
+                (t - hi, tol * (hi.abs() + terms)),
+            ] {
+                bad |= exceeds(v, bound);
+                if v > 0.0 {
+                    ratio.add(v, bound);
+                }
+            }
+        }
         (viol, bad)
     }
 
@@ -870,7 +913,12 @@ impl TorqueQp {
         }
         // c − H τ = fmin − S f on contact rows (S is block-diagonal: a few flops per
         // row), and the limit rows read τ directly.
-        let (mut viol, mut vbad) = (0.0f64, false);
+        let mut viol = RowViolations {
+            worst: 0.0,
+            ratio: WorstRatio::NONE,
+            passed: 0.0,
+        };
+        let mut vbad = false;
         for ((ci, c), repr) in self
             .contacts
             .iter()
@@ -896,11 +944,14 @@ impl TorqueQp {
             };
             vbad |= bad;
         }
-        let (limit, limit_bad) = self.limit_violation(tau, tol);
-        viol = viol.max(limit);
+        if viol.passed > 0.0 {
+            viol.ratio.add(viol.passed, tol * fscale);
+        }
+        let (limit, limit_bad) = self.limit_violation(tau, tol, &mut viol.ratio);
         vbad |= limit_bad;
-        d.max_violation = viol.max(0.0);
-        let mut cone = 0.0f64;
+        d.max_violation = viol.worst.max(limit).max(0.0);
+        d.violation_check = viol.ratio.value();
+        let (mut cone, mut cratio) = (0.0f64, WorstRatio::NONE);
         // A contact whose force is rounding noise next to the largest has no margin.
         let zero = 1e3 * f64::EPSILON * (n as f64) * fscale;
         for ((c, repr), m) in self
@@ -913,13 +964,18 @@ impl TorqueQp {
             let g = m.unwrap_or(0.0);
             if let ConeRepr::Exact = repr {
                 cone = cone.max(g - fz);
-                vbad |= exceeds(g - fz, tol * fscale.max(f64::MIN_POSITIVE) * 10.0);
+                let bound = tol * fscale.max(f64::MIN_POSITIVE) * 10.0;
+                vbad |= exceeds(g - fz, bound);
+                if g > fz {
+                    cratio.add(g - fz, bound);
+                }
             }
             // (fz − g)/max(|fz|, g): ContactModel::exact_margin.
             let size = fz.abs().max(g);
             *m = (size > zero).then(|| (fz - g) / size);
         }
         d.cone_violation = cone.max(0.0);
+        d.cone_check = cratio.value();
         let paper = model.equilibrium == Equilibrium::PaperModel;
         if paper {
             let scale = norm_inf(w).max(norm_inf(f)).max(1.0);

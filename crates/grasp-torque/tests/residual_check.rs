@@ -165,3 +165,62 @@ fn a_moment_no_contact_makes_is_unreachable() {
         }
     }
 }
+
+/// Each check's ratio (`wrench_check`, `torque_check`, `violation_check`,
+/// `cone_check`: the worst row against the bound it was judged by) is the check's own
+/// decision: an answer is refused exactly when one exceeds 1. On every bundled grasp,
+/// linear and exact, the optimum and answers moved off it along each joint by 1e-14
+/// to 1e-1 of the largest torque, so that some pass and some fail by a little. (The
+/// report printed "within 7.3e-12" beside a violation of 5.1e-12 that the check had
+/// refused against its row's own bound of 2.2e-12: fuzz_answers.py seed 5532.)
+#[test]
+fn each_check_ratio_is_the_check_decision() {
+    use grasp_torque::Cones;
+    let files = grasp_testkit::fixture_paths(&["", "hands", "table1", "geometry"]);
+    let (mut passed, mut refused) = (0, 0);
+    for path in &files {
+        let p = grasp_torque::load_problem(path).unwrap();
+        for cones in [Cones::Linear, Cones::Exact] {
+            let label = format!("{} {cones:?}", path.display());
+            let config = SolverConfig {
+                cones,
+                ..Default::default()
+            };
+            let mut solver = GraspSolver::new(&p, &config).unwrap();
+            let s = solver
+                .solve(&p.wrench, &WarmStart::default())
+                .unwrap()
+                .clone();
+            assert_eq!(s.status, Status::Optimal, "{label}: {:?}", s.reason);
+            let scale = s.torque.iter().fold(0.0f64, |a, t| a.max(t.abs()));
+            let qp = solver.problem();
+            for j in 0..s.torque.len() {
+                for step in [1e-14, 1e-12, 1e-10, 1e-9, 1e-8, 1e-6, 1e-1] {
+                    let mut moved = s.clone();
+                    moved.torque[j] += step * scale;
+                    qp.complete(&p.wrench, 1e-9, "test", &mut moved);
+                    let d = &moved.diagnostics;
+                    let worst = [
+                        d.wrench_check,
+                        d.torque_check,
+                        d.violation_check,
+                        d.cone_check,
+                    ]
+                    .into_iter()
+                    .fold(0.0f64, f64::max);
+                    let failed = moved.status == Status::NumericalFailure;
+                    assert_eq!(failed, worst > 1.0, "{label}, joint {j} by {step:e}: {d:?}");
+                    if failed {
+                        refused += 1;
+                    } else {
+                        passed += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        passed >= 100 && refused >= 100,
+        "{passed} passed, {refused} refused"
+    );
+}
