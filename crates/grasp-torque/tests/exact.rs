@@ -470,6 +470,58 @@ fn a_grasp_held_only_by_a_long_arm_is_held() {
     );
 }
 
+/// The certificate's gap bounds σ's error, `σ(x) − σ* ≤ sᵀz + ‖ρ‖²/4` for z in K*,
+/// and is judged against σ, with only the rounding of sᵀz admitted beyond: against
+/// `Σ |b_i z_i|` as before, multipliers grown along a ray of the dual passed points
+/// far from the optimum. Four grasps at a hundredth of the friction were `optimal` at
+/// 2.4e-9 to 5.5e-8 from σ* (cvxpy on the forces, `scripts/oracle_file.py` on
+/// `fallbacks write SEED:0.01`), and `fixtures/fuzz/apex-held-by-a-limit.json`, whose
+/// torque limit holds a contact at its apex (no strictly feasible point), at 1e-4
+/// above σ* in any units, by the interior-point method with multipliers of 1e12.
+#[test]
+fn the_gap_bounds_sigma_whatever_the_multipliers() {
+    for (seed, oracle) in [
+        (500409, 2.410757797021e2),
+        (507928, 1.493778392058e5),
+        (526991, 1.152370310595e5),
+        (533495, 1.886582418482e5),
+    ] {
+        let s = run(&grasp(seed, 0.01), Backend::ActiveSet, Cones::Exact);
+        assert_eq!(s.status, Status::Optimal, "seed {seed}: {:?}", s.reason);
+        // The oracle's accuracy, about 1e-10, and the certificate's 2e-9 on σ.
+        assert!(
+            rel(s.objective, oracle) <= 1e-9,
+            "seed {seed}: σ* {} against {oracle}",
+            s.objective
+        );
+    }
+    const ORACLE: f64 = 2.266529191106e-7;
+    let p = fixture("fuzz/apex-held-by-a-limit");
+    for (l, f) in [(1.0, 1.0), (1.1, 20.5), (1e-3, 1e3), (1e2, 1e-2)] {
+        let q = grasp_testkit::rescale(&p, l, f);
+        let back = (l * f) * (l * f);
+        let at = format!("lengths × {l:e}, forces × {f:e}");
+        let lin = run(&q, Backend::ActiveSet, Cones::Linear);
+        assert_eq!(lin.status, Status::Optimal, "{at}: {:?}", lin.reason);
+        // The inscribed polyhedra hold the contact at the apex too, at the same σ.
+        assert!(
+            rel(lin.objective / back, ORACLE) <= 1e-9,
+            "{at}: σ(8) {}",
+            lin.objective
+        );
+        let s = run(&q, Backend::ActiveSet, Cones::Exact);
+        match s.status {
+            Status::Optimal => assert!(
+                rel(s.objective / back, ORACLE) <= 3e-9,
+                "{at}: σ* {} against {ORACLE}",
+                s.objective / back
+            ),
+            Status::NumericalFailure => {}
+            other => panic!("{at}: {other:?} {:?}", s.reason),
+        }
+    }
+}
+
 /// A joint whose row of Jᵀ is a combination of G's, `s cᵀ G` (so that the equalities
 /// pin its torque to `s c·w`), with one side of its range exactly there: every
 /// admissible torque meets that limit, so the answer is the one without it. On 100
