@@ -814,6 +814,7 @@ impl ConicForm {
             dual,
             stationarity,
             gap,
+            excess: excess / (0.5 * xpx).max(f64::MIN_POSITIVE),
             passed: finite && primal <= tol && dual <= tol && stationarity <= tol && gap <= tol,
         }
     }
@@ -984,8 +985,11 @@ pub struct Certificate {
     pub dual: f64,
     /// `‖P x + Aᵀ z‖∞`.
     pub stationarity: f64,
-    /// `|xᵀPx + bᵀz|`, the duality gap.
+    /// `|sᵀz|`, the duality gap, against `xᵀPx` and the rounding of its terms.
     pub gap: f64,
+    /// `|sᵀz| / σ`: for z in K* (projected there), a bound on how far σ is above the
+    /// optimum, relative.
+    pub excess: f64,
     /// Whether every measure is within the tolerance.
     pub passed: bool,
 }

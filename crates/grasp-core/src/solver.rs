@@ -19,8 +19,10 @@ use std::time::{Duration, Instant};
 pub enum Status {
     /// An optimal torque was found, and it passed the residual checks.
     Optimal,
-    /// The backend reached only reduced accuracy (Clarabel's "almost solved"); the
-    /// answer still passed the residual checks.
+    /// The backend reached only reduced accuracy (Clarabel's "almost solved", or an
+    /// exact-cone answer whose certificate bounds σ only to within 1e-6 of the
+    /// optimum, with the bound in a warning); the answer still passed the residual
+    /// checks.
     AlmostOptimal,
     /// No torque satisfies the constraints; [`Solution::reason`] says why.
     Infeasible,

@@ -516,10 +516,39 @@ fn the_gap_bounds_sigma_whatever_the_multipliers() {
                 "{at}: σ* {} against {ORACLE}",
                 s.objective / back
             ),
-            Status::NumericalFailure => {}
+            Status::NumericalFailure | Status::AlmostOptimal => {}
             other => panic!("{at}: {other:?} {:?}", s.reason),
         }
     }
+}
+
+/// An interior-point answer whose certificate fails only on the gap, and that bounds
+/// σ within 1e-6 of the optimum, is `almost_optimal`, with the bound in a warning:
+/// `fixtures/fuzz/interior-point-gap.json` (fuzz seed 1030), whose best iterate's
+/// gap, a primal residual of rounding times multipliers of 1e6, is 5e-8 of σ. It was
+/// `optimal` at 5e-9 above σ*, with σ spread by 1.5e-8 over five unit systems. The
+/// answer must hold the bound it states, and no point below σ* may pass.
+#[test]
+fn an_answer_its_gap_bounds_only_loosely_is_almost_optimal() {
+    const ORACLE: f64 = 1.450032515658e-1;
+    let p = fixture("fuzz/interior-point-gap");
+    let s = run(&p, Backend::ActiveSet, Cones::Exact);
+    assert_eq!(s.status, Status::AlmostOptimal, "{:?}", s.reason);
+    let bound: f64 = s
+        .warnings
+        .iter()
+        .find_map(|w| w.strip_prefix("the exact-cone answer's certificate bounds σ only to "))
+        .and_then(|w| w.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .expect("the bound in a warning");
+    assert!(bound > 2e-9 && bound <= 1e-6, "bound {bound:e}");
+    // The oracle's accuracy, 1e-10, on either side.
+    let r = (s.objective - ORACLE) / ORACLE;
+    assert!(
+        r >= -1e-10 && r <= bound + 1e-10,
+        "σ {} against {ORACLE}: {r:e}",
+        s.objective
+    );
 }
 
 /// A joint whose row of Jᵀ is a combination of G's, `s cᵀ G` (so that the equalities
@@ -679,7 +708,10 @@ fn a_grasp_the_inscribed_polyhedra_hold_is_never_infeasible() {
         assert_eq!(linear.status, Status::Optimal, "{eps}");
         let exact = run(&p, Backend::ActiveSet, Cones::Exact);
         match exact.status {
-            Status::Optimal => assert!(exact.objective <= linear.objective, "{eps}"),
+            // (At 1e-7 the interior-point answer's gap bounds σ to 3e-9 of the optimum.)
+            Status::Optimal | Status::AlmostOptimal => {
+                assert!(exact.objective <= linear.objective, "{eps}")
+            }
             Status::NumericalFailure => assert!(
                 format!("{}", exact.reason.as_ref().unwrap()).contains("inscribed polyhedra hold"),
                 "{eps}: {:?}",
