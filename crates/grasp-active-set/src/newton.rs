@@ -41,6 +41,10 @@ use grasp_core::{ConeKind, ConicForm, Matrix};
 
 /// Largest tail of a second-order cone (the friction cones' are 2 or 3 long).
 const MAX_TAIL: usize = crate::ipm::SOC_MAX - 1;
+/// A reduced row at most this times the largest of its cone's is one the equalities
+/// make constant (rounding of zero), as `grasp_core::model::PINNED` decides a pinned
+/// joint ([`Newton::rebalance_apex`]).
+const PINNED_ROW: f64 = 1e3 * f64::EPSILON;
 /// Newton iterations per guess, and corrections of the guess.
 const MAX_NEWTON: usize = 12;
 const MAX_CHANGES: usize = 8;
@@ -636,7 +640,14 @@ impl Newton {
             for k in 0..self.socs.len() {
                 let v = match self.piece[k] {
                     Piece::Boundary => self.nu_cone[k],
-                    Piece::Apex => -self.apex_deficit(k),
+                    Piece::Apex => {
+                        let v = -self.apex_deficit(k);
+                        if v < -1e-12 * numax && self.rebalance_apex(k) {
+                            -self.apex_deficit(k)
+                        } else {
+                            v
+                        }
+                    }
                     Piece::Inside => continue,
                 };
                 if v < -1e-12 * numax && most.is_none_or(|(m, _)| v < m) {
@@ -1065,6 +1076,134 @@ impl Newton {
             }
             _ => soc_norm(&tail[..dim - 1]) - head,
         }
+    }
+
+    /// Where cone k's apex dual is outside the dual cone, the multipliers the pieces
+    /// leave undetermined, chosen to put it there, if they can; whether they did.
+    /// - A row of the cone that the equalities make constant (zero on their null
+    ///   space) has a multiplier stationarity does not read: a tail row's is taken 0,
+    ///   a head's as large as the tail.
+    /// - An active row whose gradient lies in the span of the cone's other rows (a
+    ///   torque limit on a joint only that contact moves, say) can pass its multiplier
+    ///   to the cone's: `a_r = Σ γ_j a_j` leaves `ν_r a_r + Σ λ_j a_j` unchanged by
+    ///   `ν_r + δ`, `λ − δγ`; the δ nearest 0 (with `ν_r + δ ≥ 0`) that puts the apex
+    ///   dual on the dual cone is taken.
+    ///
+    /// Where such a row holds the contact at its apex (a limit at the torque of the
+    /// unloaded contact, which every other force in the cone would pass), there are no
+    /// multipliers in the dual cone without it: the cone left its apex and came back
+    /// until its guesses ran out, and the interior-point method, with no strictly
+    /// feasible point, grew the limit's multiplier to 1e12 (fuzz_answers.py seed 230).
+    fn rebalance_apex(&mut self, k: usize) -> bool {
+        if self.pair[k].is_some_and(|j| self.piece[j] == Piece::Apex) {
+            return false;
+        }
+        let (start, dim) = self.socs[k];
+        let n = self.n;
+        // The cone's rows that the equalities leave free.
+        let largest = (0..dim).fold(0.0f64, |m, j| m.max(norm_inf(self.a_red.row(start + j))));
+        let fixed = |j: usize, a: &Matrix| norm_inf(a.row(start + j)) <= PINNED_ROW * largest;
+        if fixed(0, &self.a_red) {
+            let tail = soc_norm(&self.nu_row[start + 1..start + dim]);
+            self.nu_row[start] = self.nu_row[start].max(tail);
+            return true;
+        }
+        // (Kept, to be put back unless the dual ends in the dual cone: leaving the apex
+        // reads its direction.)
+        let mut was = [0.0; crate::ipm::SOC_MAX];
+        was[..dim].copy_from_slice(&self.nu_row[start..start + dim]);
+        for j in 1..dim {
+            if fixed(j, &self.a_red) {
+                self.nu_row[start + j] = 0.0;
+            }
+        }
+        if self.apex_deficit(k) <= 0.0 {
+            return true;
+        }
+        // The Gram matrix of the free rows, and each active row's coefficients in them.
+        let free: [bool; crate::ipm::SOC_MAX] =
+            std::array::from_fn(|j| j < dim && !fixed(j, &self.a_red));
+        let a = &self.a_red;
+        let mut gram = [0.0; crate::ipm::SOC_MAX * crate::ipm::SOC_MAX];
+        let gram = &mut gram[..dim * dim];
+        for i in 0..dim {
+            for j in 0..dim {
+                gram[i * dim + j] = match (free[i], free[j]) {
+                    (true, true) => dot4(a.row(start + i), a.row(start + j)),
+                    _ => f64::from(u8::from(i == j)),
+                };
+            }
+        }
+        if !cholesky(gram, dim) {
+            self.nu_row[start..start + dim].copy_from_slice(&was[..dim]);
+            return false;
+        }
+        for r in self.orth.0..self.orth.1 {
+            if !self.active[r] || self.nu_row[r] < 0.0 {
+                continue;
+            }
+            let ar = a.row(r);
+            let mut gamma = [0.0; crate::ipm::SOC_MAX];
+            let gamma = &mut gamma[..dim];
+            for (j, g) in gamma.iter_mut().enumerate() {
+                *g = if free[j] {
+                    dot4(a.row(start + j), ar)
+                } else {
+                    0.0
+                };
+            }
+            forward(gram, dim, gamma);
+            backward(gram, dim, gamma);
+            // In the span: the least-squares residual is rounding of the row.
+            let off = (0..n).fold(0.0f64, |m, c| {
+                let v: f64 = (0..dim).map(|j| gamma[j] * a[(start + j, c)]).sum();
+                m.max((v - ar[c]).abs())
+            });
+            if off.is_nan() || off > PINNED_ROW * norm_inf(ar) {
+                continue;
+            }
+            // ‖t − δg‖ = h − δq on the boundary: A δ² + B δ + C = 0.
+            let (h, t) = (self.nu_row[start], &self.nu_row[start + 1..start + dim]);
+            let (q, g) = (gamma[0], &gamma[1..]);
+            let dotp = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(x, y)| x * y).sum::<f64>();
+            let (qa, qb, qc) = (
+                dotp(g, g) - q * q,
+                -2.0 * (dotp(t, g) - h * q),
+                dotp(t, t) - h * h,
+            );
+            let deficit = |d: f64| {
+                let tail = t
+                    .iter()
+                    .zip(g)
+                    .map(|(x, y)| (x - d * y).powi(2))
+                    .sum::<f64>();
+                tail.sqrt() - (h - d * q)
+            };
+            let size = |d: f64| (h.abs() + soc_norm(t)) + d.abs() * (q.abs() + soc_norm(g));
+            let disc = qb * qb - 4.0 * qa * qc;
+            let roots = if qa.abs() > 1e-12 * (dotp(g, g) + q * q) && disc >= 0.0 {
+                let sq = disc.sqrt();
+                [(-qb - sq) / (2.0 * qa), (-qb + sq) / (2.0 * qa)]
+            } else if qb != 0.0 {
+                [-qc / qb; 2]
+            } else {
+                continue;
+            };
+            let lowest = -self.nu_row[r];
+            let best = roots
+                .into_iter()
+                .filter(|&d| d.is_finite() && d >= lowest && h - d * q >= 0.0)
+                .filter(|&d| deficit(d) <= 1e-12 * size(d))
+                .min_by(|x, y| x.abs().total_cmp(&y.abs()));
+            let Some(d) = best else { continue };
+            self.nu_row[r] += d;
+            for (j, gj) in gamma.iter().enumerate() {
+                self.nu_row[start + j] -= d * gj;
+            }
+            return true;
+        }
+        self.nu_row[start..start + dim].copy_from_slice(&was[..dim]);
+        false
     }
 
     /// The cone that leaves the apex when cone k's apex dual is outside the dual cone:

@@ -166,11 +166,15 @@ impl ConicForm {
         // methods' resolution against P = 2I (a joint with moment arms 1e-8 of the
         // others' left 17 of 200 sweep grasps failing, Newton and the interior-point
         // method alike; 2 with the typical scale). Below that spread k stays the
-        // largest, which the hard cases of tests/exact.rs were solved with.
+        // largest, which the hard cases of tests/exact.rs were solved with. A joint
+        // that moves no contact (its row of Jᵀ zero, its torque pinned) has no scale:
+        // its response, rounding at 1e-17, took the mean down by 1e10, x with it, and
+        // the interior-point method stopped on its absolute gap at 1e-4 of σ.
         let (mut logs, mut count, mut largest) = (0.0f64, 0usize, 0.0f64);
         for j in 0..m {
             let r = col_scale[j] / model.weights[j].sqrt();
-            if r > 0.0 && r.is_finite() {
+            let moves = model.jacobian_transpose.row(j).iter().any(|v| *v != 0.0);
+            if moves && r > 0.0 && r.is_finite() {
                 logs += r.ln();
                 count += 1;
                 largest = largest.max(r);

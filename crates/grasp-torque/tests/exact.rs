@@ -477,7 +477,8 @@ fn a_grasp_held_only_by_a_long_arm_is_held() {
 /// 2.4e-9 to 5.5e-8 from σ* (cvxpy on the forces, `scripts/oracle_file.py` on
 /// `fallbacks write SEED:0.01`), and `fixtures/fuzz/apex-held-by-a-limit.json`, whose
 /// torque limit holds a contact at its apex (no strictly feasible point), at 1e-4
-/// above σ* in any units, by the interior-point method with multipliers of 1e12.
+/// above σ* in any units, by the interior-point method with multipliers of 1e12. (That
+/// grasp is now Newton's: `a_tendon_that_holds_a_contact_unloaded_is_the_grasp_without_it`.)
 #[test]
 fn the_gap_bounds_sigma_whatever_the_multipliers() {
     for (seed, oracle) in [
@@ -509,17 +510,109 @@ fn the_gap_bounds_sigma_whatever_the_multipliers() {
             "{at}: σ(8) {}",
             lin.objective
         );
+        // Newton, with the limit's multiplier moved into the apex's dual.
         let s = run(&q, Backend::ActiveSet, Cones::Exact);
-        match s.status {
-            Status::Optimal => assert!(
-                rel(s.objective / back, ORACLE) <= 3e-9,
-                "{at}: σ* {} against {ORACLE}",
-                s.objective / back
-            ),
-            Status::NumericalFailure | Status::AlmostOptimal => {}
-            other => panic!("{at}: {other:?} {:?}", s.reason),
+        assert_eq!(s.status, Status::Optimal, "{at}: {:?}", s.reason);
+        assert_eq!(s.method, Some("newton"), "{at}");
+        assert!(
+            rel(s.objective / back, ORACLE) <= 1e-9,
+            "{at}: σ* {} against {ORACLE}",
+            s.objective / back
+        );
+    }
+}
+
+/// A tendon that only pulls (upper limit 0) on a joint whose only load is one contact,
+/// through a direction inside that contact's dual cone: every force in the cone but
+/// zero would push the joint, so every admissible torque leaves the contact unloaded,
+/// an equality no row states (no strictly feasible point). The answer must be the
+/// grasp's without that contact, σ to 1e-8, linear and exact. The multipliers are then
+/// unbounded: the interior-point method grew the limit's to 1e12 and was `optimal` at
+/// 1e-4 above σ* (fuzz seed 230, `fixtures/fuzz/apex-held-by-a-limit.json`), and Newton
+/// left the apex, whose dual was outside the dual cone with the limit's multiplier
+/// where the pieces had put it; it now moves that multiplier into the cone's
+/// (`Newton::rebalance_apex`).
+#[test]
+fn a_tendon_that_holds_a_contact_unloaded_is_the_grasp_without_it() {
+    use grasp_torque::{ContactModel, Matrix, TorqueLimit};
+    let (mut compared, mut apex) = (0, 0);
+    for friction in [1.0, 0.25] {
+        for seed in 0..200u64 {
+            let p = grasp(seed, friction);
+            let (c, j) = (seed as usize % p.contacts.len(), seed as usize % p.joints());
+            let off: usize = p.contacts[..c].iter().map(|m| m.dim()).sum();
+            let model = p.contacts[c];
+            // g inside the dual cone: the normal, half the cone's tangential reach.
+            let mut g = vec![0.0; model.dim()];
+            g[model.normal_index()] = 1.0;
+            match model {
+                ContactModel::Fpc => {}
+                ContactModel::Pcwf { mu } => g[0] = 0.5 / mu,
+                ContactModel::SfcLinear { mu, mu_torsion }
+                | ContactModel::SfcElliptic { mu, mu_torsion } => {
+                    (g[0], g[1], g[3]) = (0.3 / mu, -0.2 / mu, 0.3 / mu_torsion);
+                }
+            }
+            let arm = p
+                .jacobian_transpose
+                .row(j)
+                .iter()
+                .fold(0.0f64, |a, v| a.max(v.abs()));
+            let mut held = p.clone();
+            let row = held.jacobian_transpose.row_mut(j);
+            row.iter_mut().for_each(|v| *v = 0.0);
+            for (k, gk) in g.iter().enumerate() {
+                row[off + k] = arm * gk;
+            }
+            let mut limits = held.torque_limits.clone().unwrap_or(vec![None; p.joints()]);
+            limits[j] = Some(TorqueLimit::Range(None, Some(0.0)));
+            held.torque_limits = Some(limits);
+            if let Some(f) = &mut held.min_normal_force {
+                f[c] = 0.0;
+            }
+            // Without the contact: its columns gone, joint j's row empty (τ_j = 0).
+            let keep: Vec<usize> = (0..p.grasp_matrix.ncols())
+                .filter(|&k| k < off || k >= off + model.dim())
+                .collect();
+            let cols = |m: &Matrix| Matrix::from_fn(m.nrows(), keep.len(), |r, k| m[(r, keep[k])]);
+            let mut free = held.clone();
+            free.grasp_matrix = cols(&held.grasp_matrix);
+            free.jacobian_transpose = cols(&held.jacobian_transpose);
+            free.contacts.remove(c);
+            free.torque_limits.as_mut().unwrap()[j] = None;
+            if let Some(f) = &mut free.min_normal_force {
+                f.remove(c);
+            }
+            // (Where [G; Jᵀ] has a null space, its passive internal forces depend on
+            // every contact's columns: the two grasps are then different problems.)
+            let passive = |q: &GraspProblem| {
+                GraspSolver::new(q, &SolverConfig::default())
+                    .map_or(1, |s| s.problem().model.passive_dim())
+            };
+            if free.contacts.is_empty() || passive(&held) + passive(&free) > 0 {
+                continue;
+            }
+            for cones in [Cones::Linear, Cones::Exact] {
+                let [a, b] = [&held, &free].map(|q| run(q, Backend::ActiveSet, cones));
+                let at =
+                    format!("seed {seed} friction {friction}, contact {c}, joint {j}, {cones:?}");
+                assert_eq!(a.status, b.status, "{at}: {:?} / {:?}", a.reason, b.reason);
+                if a.status == Status::Optimal {
+                    assert!(
+                        rel(a.objective, b.objective) <= 1e-8,
+                        "{at}: σ {} against {}",
+                        a.objective,
+                        b.objective
+                    );
+                    compared += 1;
+                    let f = &a.contact_forces[off..off + model.dim()];
+                    apex += usize::from(f.iter().all(|v| *v == 0.0 || v.abs() < 1e-9));
+                }
+            }
         }
     }
+    eprintln!("{compared} optimal answers compared, {apex} with the contact at its apex");
+    assert!(compared >= 100, "{compared}");
 }
 
 /// An interior-point answer whose certificate fails only on the gap, and that bounds
