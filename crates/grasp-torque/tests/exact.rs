@@ -535,7 +535,7 @@ fn the_gap_bounds_sigma_whatever_the_multipliers() {
 #[test]
 fn a_tendon_that_holds_a_contact_unloaded_is_the_grasp_without_it() {
     use grasp_torque::{ContactModel, Matrix, TorqueLimit};
-    let (mut compared, mut apex) = (0, 0);
+    let mut compared = 0;
     for friction in [1.0, 0.25] {
         for seed in 0..200u64 {
             let p = grasp(seed, friction);
@@ -605,13 +605,18 @@ fn a_tendon_that_holds_a_contact_unloaded_is_the_grasp_without_it() {
                         b.objective
                     );
                     compared += 1;
+                    // The contact is unloaded: its force rounding of the largest.
+                    let fmax = a.contact_forces.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                     let f = &a.contact_forces[off..off + model.dim()];
-                    apex += usize::from(f.iter().all(|v| *v == 0.0 || v.abs() < 1e-9));
+                    assert!(
+                        f.iter().all(|v| v.abs() <= 1e-7 * fmax),
+                        "{at}: the held contact's force {f:?} (largest {fmax:e})"
+                    );
                 }
             }
         }
     }
-    eprintln!("{compared} optimal answers compared, {apex} with the contact at its apex");
+    eprintln!("{compared} optimal answers compared, each with the contact unloaded");
     assert!(compared >= 100, "{compared}");
 }
 
