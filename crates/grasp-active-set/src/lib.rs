@@ -247,8 +247,9 @@ struct Engine {
     fixed: Vec<usize>,
     fixed_c0: Vec<f64>,
     fixed_m: Matrix,
-    /// Rounding floor of a fixed row's value per unit of `‖w‖∞`.
-    fixed_floor: f64,
+    /// The largest `|m_ij|` of any row (fixed or not) per wrench component `j`: a fixed
+    /// row's value is judged against `Σ_j |m_ij w_j|` of these, in force units.
+    wrench_terms: [f64; 6],
     ws: Workspace,
     /// The hot start's answer as affine maps of the wrench, for one key set.
     hot: hot::HotMap,
@@ -611,8 +612,8 @@ impl Engine {
         let mut red_row = vec![usize::MAX; rows];
         // A fixed row whose wrench terms are themselves rounding (a contact that neither
         // torque nor wrench loads, as an unactuated joint can leave one) is judged
-        // against the rounding of the largest wrench row.
-        let mut largest_wrench_row = 0.0f64;
+        // against the wrench's largest terms in any row.
+        let mut wrench_terms = [0.0f64; 6];
         for i in 0..rows {
             let nrm = grasp_core::matrix::norm2(&hnp.row(i)[..k]);
             if nrm > zero_of(i) {
@@ -622,13 +623,10 @@ impl Engine {
             } else {
                 fixed.push(i);
             }
-            let mut size = 0.0;
-            for v in mfull(i) {
-                size += v.abs();
+            for (t, v) in wrench_terms.iter_mut().zip(mfull(i)) {
+                *t = t.max(v.abs());
             }
-            largest_wrench_row = largest_wrench_row.max(size);
         }
-        let fixed_floor = 1e3 * f64::EPSILON * largest_wrench_row;
         // The reduced rows, normalised: row-major in `a`, column-major in `a_cols` and
         // `mn_cols`.
         let nr = h_row.len();
@@ -695,7 +693,7 @@ impl Engine {
             fixed,
             fixed_c0,
             fixed_m,
-            fixed_floor,
+            wrench_terms,
             ws,
             hot: hot::HotMap::new(k, nr, m),
         })
@@ -749,16 +747,15 @@ impl Engine {
         // Rows that no torque affects must hold for the wrench alone.
         for (r, &row) in self.fixed.iter().enumerate() {
             let c = self.fixed_c0[r] - dot(self.fixed_m.row(r), w);
-            // Relative to the row's own terms: the same in any units.
-            let scale = self.c0[row].abs()
-                + self
-                    .fixed_m
-                    .row(r)
-                    .iter()
-                    .zip(w)
-                    .map(|(a, b)| (a * b).abs())
-                    .sum::<f64>();
-            if c > self.settings.feasibility_tolerance * scale + self.fixed_floor * norm_inf(w) {
+            // Relative to the row's own terms and to the wrench's largest terms in any
+            // row, both forces: the same in any units. The row's value is the difference
+            // of terms that cancel, whose rounding the conditioning of the consistency
+            // rows amplifies: a contact the wrench leaves unloaded came out at 1e-12 of
+            // the wrench below its cone, judged infeasible in one system of units only,
+            // where the floor was ‖w‖∞ times the largest row's terms.
+            let size = |m: &[f64]| m.iter().zip(w).map(|(a, b)| (a * b).abs()).sum::<f64>();
+            let scale = self.c0[row].abs() + size(self.fixed_m.row(r)) + size(&self.wrench_terms);
+            if c > self.settings.feasibility_tolerance * scale {
                 out.status = Status::Infeasible;
                 out.reason = Some(Reason::FixedRowViolated {
                     row: self.rows[row],

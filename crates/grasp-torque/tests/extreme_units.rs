@@ -200,3 +200,68 @@ fn loose_torque_limits_do_not_change_the_answer() {
     }
     assert!(checked > 100, "{checked}");
 }
+
+/// A contact the wrench leaves unloaded, through a row no torque affects beyond
+/// rounding (`fixtures/fuzz/unloaded-by-the-wrench.json`, `fuzz_answers.py` seed 17234):
+/// the row's value is a difference of terms that cancel, which rounds to 1e-12 of the
+/// wrench below the cone. That rounding was judged against `‖w‖∞` times the largest
+/// row's terms, which lengths in other units change, so with lengths 81 times smaller
+/// the grasp was `infeasible`. It is held, with the same σ, in every unit system.
+#[test]
+fn a_contact_the_wrench_leaves_unloaded_is_held_in_any_units() {
+    let path = format!(
+        "{}/../../fixtures/fuzz/unloaded-by-the-wrench.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let p = grasp_torque::load_problem(&path).unwrap();
+    for (cones, tol) in [(Cones::Linear, 1e-9), (Cones::Exact, 2e-9)] {
+        let base = run(&p, cones);
+        assert!(base.is_optimal(), "{cones}: {:?}", base.reason);
+        for l in [1e-3, 1.0 / 81.0, 0.1, 10.0, 81.0, 1e3] {
+            for f in [1e-3, 1.0, 1e3] {
+                let q = grasp_testkit::rescale(&p, l, f);
+                let s = run(&q, cones);
+                let at = format!("{cones}, lengths × {l:e}, forces × {f:e}");
+                assert!(s.is_optimal(), "{at}: {:?} {:?}", s.status, s.reason);
+                let sigma = sigma_back(&p, &s, l * f);
+                assert!(
+                    (sigma - base.objective).abs() <= tol * base.objective,
+                    "{at}: σ = {sigma} against {}",
+                    base.objective
+                );
+            }
+        }
+    }
+}
+
+/// A row set aside as one no torque affects, on a grasp where a joint's tiny row of Jᵀ
+/// sets that rounding level high (`fixtures/fuzz/set-aside-row-held.json`,
+/// `fuzz_answers.py` seed 220): the wrench alone leaves it 5e-10 N below its bound,
+/// within the feasibility tolerance of the wrench's terms. It was `infeasible`; the
+/// answer is cvxpy's optimum, and the core's check holds every row on it.
+#[test]
+fn a_row_set_aside_within_the_tolerance_of_the_wrench_is_held() {
+    let path = format!(
+        "{}/../../fixtures/fuzz/set-aside-row-held.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let p = grasp_torque::load_problem(&path).unwrap();
+    // `python3 scripts/oracle_file.py fixtures/fuzz/set-aside-row-held.json` (cvxpy,
+    // exact cones, to its solver's accuracy: 2e-11 from the native σ*).
+    let sigma_star = 3.423746127636e4;
+    let exact = run(&p, Cones::Exact);
+    assert!(exact.is_optimal(), "{:?} {:?}", exact.status, exact.reason);
+    assert!(
+        (exact.objective - sigma_star).abs() <= 1e-9 * sigma_star,
+        "σ* = {} against {sigma_star}",
+        exact.objective
+    );
+    let linear = run(&p, Cones::Linear);
+    assert!(
+        linear.is_optimal(),
+        "{:?} {:?}",
+        linear.status,
+        linear.reason
+    );
+    assert!(linear.objective >= exact.objective * (1.0 - 1e-9));
+}
