@@ -121,6 +121,8 @@ pub struct ExactSolver {
     fine: Option<ActiveSetSolver>,
     settings: ActiveSetSettings,
     lin: Solution,
+    /// The core's check of `lin` in the exact cones ([`Self::inscribed_holds`]).
+    probe: Solution,
     b: Vec<f64>,
     dual: Vec<f64>,
     scratch: Vec<f64>,
@@ -307,6 +309,7 @@ impl ExactSolver {
             fine: None,
             settings,
             lin: Solution::default(),
+            probe: Solution::default(),
             b: vec![0.0; rows],
             dual: vec![0.0; rows],
             scratch: Vec::new(),
@@ -371,6 +374,21 @@ impl ExactSolver {
     fn newton_from_polyhedra(&mut self, w: &[f64; 6], alpha: f64, out: &mut Solution) -> bool {
         self.guess(alpha);
         self.try_newton(w, alpha, false, out)
+    }
+
+    /// Whether the polyhedral optimum in `self.lin` holds the grasp in the exact cones:
+    /// the core's own check of it, on the exact view. The linear solver's `optimal` is
+    /// not proof: it holds its rows normalised in the free torques, and where `[G; Jᵀ]`
+    /// is ill-conditioned (a row of Jᵀ scaled by 1e7, another's entry at 1e-9) such an
+    /// answer has left a contact outside its cone by 2.6e3 N, which the core refuses.
+    fn inscribed_holds(&mut self, w: &[f64; 6]) -> bool {
+        let probe = &mut self.probe;
+        probe.status = Status::Optimal;
+        probe.torque.clone_from(&self.lin.torque);
+        probe.internal_forces.clone_from(&self.lin.internal_forces);
+        self.qp
+            .complete(w, crate::RESIDUAL_TOLERANCE, "active-set", probe);
+        probe.status == Status::Optimal
     }
 
     /// The Newton guess from the polyhedral optimum in `self.lin`.
@@ -788,17 +806,22 @@ impl TorqueSolver for ExactSolver {
             .solve_raw(w, &WarmStart::default(), &mut self.lin);
         out.iterations += self.lin.iterations;
         let inscribed_infeasible = self.lin.status == Status::Infeasible;
-        // Inscribed polyhedra that hold the grasp prove it feasible, so no infeasibility
-        // is looked for past them: a dual ray proves only that no torque within
+        // Inscribed polyhedra that hold the grasp prove it feasible, so no ray of the
+        // dual is looked for past them: a ray proves only that no torque within
         // |value| / stationarity times the problem's scale holds the grasp, and a grasp
         // can need more (a contact that pushes in some direction only through an entry
         // of G 1e-8 of the rest needs torques 1e8 times the rest).
-        let inscribed_feasible = self.lin.status == Status::Optimal;
+        let lin_optimal = self.lin.status == Status::Optimal;
+        // Whether their optimum passes the core's check in the exact cones: where it
+        // does not, the grasp may still be infeasible, which the circumscribed
+        // polyhedra can prove.
+        let mut inscribed_feasible = false;
         let retry = match self.lin.status {
             Status::Optimal => {
                 if self.newton_from_polyhedra(w, alpha, out) {
                     return;
                 }
+                inscribed_feasible = self.inscribed_holds(w);
                 // (Inscribed polyhedra that hold the grasp prove nothing about the
                 // circumscribed ones' status: only their optimum is wanted.)
                 self.solve_outer(w, PROOF_SIDES)
@@ -852,7 +875,7 @@ impl TorqueSolver for ExactSolver {
                 (newton.particular(w, alpha), b.as_slice())
             };
             ipm.solve(conic, rhs, &mut |ipm| {
-                if let (Some(xp), false) = (xp, inscribed_feasible) {
+                if let (Some(xp), false) = (xp, lin_optimal) {
                     ray = ray_of(ipm, conic, b, xp, dual, scratch);
                 }
                 ray.is_some()
@@ -876,7 +899,7 @@ impl TorqueSolver for ExactSolver {
                 return;
             }
         }
-        if let Some(reason) = self.dual_ray(w, alpha).filter(|_| !inscribed_feasible) {
+        if let Some(reason) = self.dual_ray(w, alpha).filter(|_| !lin_optimal) {
             return Self::infeasible(out, reason);
         }
         // (The method's own certificate, for the report: the best iterate's and

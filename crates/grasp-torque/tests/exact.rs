@@ -1504,3 +1504,37 @@ fn a_torque_the_equalities_fix_is_decided_by_its_own_slacks() {
         let _ = q;
     }
 }
+
+/// The native linear solver's `optimal` at N = 8 is not proof that a grasp is feasible:
+/// it holds its rows normalised in the free torques, and on
+/// `fixtures/fuzz/inscribed-optimum-outside.json` (`fuzz_answers.py` seed 18013: one
+/// joint's row of Jᵀ at 1.1e7, another's one entry of 1.3e-9) its answer leaves a
+/// contact outside its cone by 2.6e3 N, which the core refuses. The exact solver took
+/// it as proof, looked for no infeasibility, and ended at the interior-point method's
+/// iteration cap saying the grasp was feasible. cvxpy (`scripts/oracle_file.py`) and
+/// Clarabel call it infeasible; so does the native solver now, by the circumscribed
+/// polyhedra at N = 256, which it tries where the inscribed optimum fails the core's
+/// check.
+#[test]
+fn an_inscribed_optimum_outside_the_cones_proves_nothing() {
+    let p = fixture("fuzz/inscribed-optimum-outside");
+    let linear = run(&p, Backend::ActiveSet, Cones::Linear);
+    assert_eq!(
+        linear.status,
+        Status::NumericalFailure,
+        "{:?}",
+        linear.reason
+    );
+    let s = run(&p, Backend::ActiveSet, Cones::Exact);
+    assert_eq!(s.status, Status::Infeasible, "{:?}", s.reason);
+    assert!(
+        matches!(s.reason, Some(Reason::OuterApproximation { .. })),
+        "{:?}",
+        s.reason
+    );
+    #[cfg(feature = "clarabel")]
+    {
+        let s = run(&p, Backend::Clarabel, Cones::Exact);
+        assert_eq!(s.status, Status::Infeasible, "Clarabel: {:?}", s.reason);
+    }
+}
