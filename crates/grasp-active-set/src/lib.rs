@@ -594,18 +594,27 @@ impl Engine {
         // longer; the limit is as binding): on torques (H factored) the row is τ_j
         // itself, whose norm in y is dinv_j; on contact forces (the force-space QP,
         // H formed) it is `Jᵀ_j f`, of norm ‖H_i D⁻¹‖.
-        let hscale = qp.max_row_norm(&dinv);
+        let mut own = Vec::new();
+        let hscale = qp.row_norms(&dinv, &mut own);
         let rounding = 1e3 * f64::EPSILON * (m as f64);
         let zero = rounding * hscale.max(f64::MIN_POSITIVE);
+        // A cone row is also judged against its own norm, at the model's resolution
+        // (its default rank tolerance, 1e-9): where one joint's force response is 1e8 times the
+        // others' (a tiny row of Jᵀ), the largest row is that joint's, whose torque
+        // the equalities pin, and a row whose part in y is 8e-8 of its own norm fell
+        // below the first bound (fuzz seed 34182: infeasible, where cvxpy finds σ* =
+        // 1.55). Only a row below both is one no torque affects. (Against its own norm
+        // at rounding level instead, a tendon hand's row of part 6e-12, the model's
+        // conditioning, was kept and broke the solve.)
+        let resolution = grasp_core::ModelOptions::default()
+            .rank_tolerance
+            .max(rounding);
         let zero_of = |i: usize| match (qp.rows[i], qp.h) {
             (RowId::TorqueLimit { joint, .. }, InequalityRows::Factored(_)) => {
                 rounding * dinv[joint]
             }
-            (RowId::TorqueLimit { .. }, InequalityRows::Formed(h)) => {
-                let row: Vec<f64> = h.row(i).iter().zip(&dinv).map(|(v, d)| v * d).collect();
-                rounding * grasp_core::matrix::norm2(&row)
-            }
-            _ => zero,
+            (RowId::TorqueLimit { .. }, _) => rounding * own[i],
+            _ => zero.min(resolution * own[i]),
         };
         let (mut h_row, mut fixed) = (Vec::with_capacity(rows), Vec::new());
         let mut nu = Vec::with_capacity(rows);

@@ -262,22 +262,51 @@ impl LeastDistance<'_> {
 
     /// [`Self::max_row_norm`] without the scaling; NaN where a square overflowed.
     fn max_row_norm_unscaled(&self, col_scale: &[f64]) -> f64 {
+        let mut largest = 0.0f64;
+        self.row_squares(col_scale, |_, sq| largest = max_or_nan(largest, sq));
+        largest.sqrt()
+    }
+
+    /// The Euclidean norm of each row of `H diag(col_scale)` into `out`, and their
+    /// largest, as [`Self::max_row_norm`] finds it (in one pass where the squares stay
+    /// within the range of f64, scaled by a power of two where they would not).
+    pub fn row_norms(&self, col_scale: &[f64], out: &mut Vec<f64>) -> f64 {
+        out.clear();
+        out.resize(self.rows.len(), 0.0);
+        self.row_squares(col_scale, |i, sq| out[i] = sq);
+        let plain = out.iter().fold(0.0, |a, &v| max_or_nan(a, v)).sqrt();
+        if plain == 0.0 || (plain.is_finite() && (1e-140..=1e140).contains(&plain)) {
+            out.iter_mut().for_each(|v| *v = v.sqrt());
+            return plain;
+        }
+        let big = self.max_row_norm(col_scale);
+        let s = if big.is_normal() {
+            2f64.powi(-(big.log2().round() as i32))
+        } else {
+            1.0
+        };
+        let scaled: Vec<f64> = col_scale.iter().map(|d| d * s).collect();
+        self.row_squares(&scaled, |i, sq| out[i] = sq.sqrt() / s);
+        big
+    }
+
+    /// `visit(i, ‖H_i diag(col_scale)‖²)` for every row i.
+    fn row_squares(&self, col_scale: &[f64], mut visit: impl FnMut(usize, f64)) {
         let f = match self.h {
             InequalityRows::Formed(h) => {
-                return (0..h.nrows())
-                    .map(|i| {
-                        h.row(i)
-                            .iter()
-                            .zip(col_scale)
-                            .map(|(h, d)| (h * d) * (h * d))
-                            .sum::<f64>()
-                    })
-                    .fold(0.0, max_or_nan)
-                    .sqrt()
+                for i in 0..h.nrows() {
+                    let sq = h
+                        .row(i)
+                        .iter()
+                        .zip(col_scale)
+                        .map(|(h, d)| (h * d) * (h * d))
+                        .sum::<f64>();
+                    visit(i, sq);
+                }
+                return;
             }
             InequalityRows::Factored(f) => f,
         };
-        let mut largest = 0.0f64;
         for (c, repr) in f.contacts.iter().zip(f.cones) {
             // (A contact has at most four force components: `ContactModel::dim`.)
             let dim = c.model.dim();
@@ -293,28 +322,33 @@ impl LeastDistance<'_> {
                 ConeRepr::Inscribed(cone) => {
                     // (Zero-padded to four: a fixed number of terms, no loop bounds.)
                     let mut f = [0.0f64; 4];
-                    for s in cone.faces.as_slice().chunks_exact(dim).take(c.rows) {
+                    for (k, s) in cone
+                        .faces
+                        .as_slice()
+                        .chunks_exact(dim)
+                        .take(c.rows)
+                        .enumerate()
+                    {
                         f[..dim].copy_from_slice(s);
                         let mut sq = 0.0;
                         for (ft, g) in f.iter().zip(&gram) {
                             sq += ft * (g[0] * f[0] + g[1] * f[1] + g[2] * f[2] + g[3] * f[3]);
                         }
-                        largest = max_or_nan(largest, sq);
+                        visit(c.first_row + k, sq);
                     }
                 }
                 // The normal force's row.
                 ConeRepr::Exact => {
                     let n = c.model.normal_index();
-                    largest = max_or_nan(largest, gram[n][n]);
+                    visit(c.first_row, gram[n][n]);
                 }
             }
         }
-        for id in self.rows {
+        for (i, id) in self.rows.iter().enumerate() {
             if let RowId::TorqueLimit { joint, .. } = *id {
-                largest = largest.max(col_scale[joint] * col_scale[joint]);
+                visit(i, col_scale[joint] * col_scale[joint]);
             }
         }
-        largest.sqrt()
     }
 }
 

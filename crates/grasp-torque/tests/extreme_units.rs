@@ -265,3 +265,37 @@ fn a_row_set_aside_within_the_tolerance_of_the_wrench_is_held() {
     );
     assert!(linear.objective >= exact.objective * (1.0 - 1e-9));
 }
+
+/// A row that the free torques move, beside a joint whose force response is 1e8 times
+/// the others' (`fixtures/fuzz/row-beside-a-pinned-joint.json`, `fuzz_answers.py` seed
+/// 34182: joint 7's row of Jᵀ made 1e-8 times joint 9's, so the equalities pin its
+/// torque). The largest row of H is that joint's, and a face whose part in the free
+/// torques is 8e-8 of its own norm fell below the rounding level of that largest row:
+/// set aside as one no torque affects, it made the grasp `infeasible` by 42.7 N. Rows
+/// are now also judged against their own norm; the answer is cvxpy's optimum.
+#[test]
+fn a_row_beside_a_pinned_joint_is_not_set_aside() {
+    let path = format!(
+        "{}/../../fixtures/fuzz/row-beside-a-pinned-joint.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let p = grasp_torque::load_problem(&path).unwrap();
+    // `python3 scripts/oracle_file.py fixtures/fuzz/row-beside-a-pinned-joint.json`
+    // (cvxpy, exact cones; 5e-12 from the native σ*).
+    let sigma_star = 1.545814591206;
+    let exact = run(&p, Cones::Exact);
+    assert!(exact.is_optimal(), "{:?} {:?}", exact.status, exact.reason);
+    assert!(
+        (exact.objective - sigma_star).abs() <= 1e-9 * sigma_star,
+        "σ* = {} against {sigma_star}",
+        exact.objective
+    );
+    let linear = run(&p, Cones::Linear);
+    assert!(
+        linear.is_optimal(),
+        "{:?} {:?}",
+        linear.status,
+        linear.reason
+    );
+    assert!(linear.objective >= exact.objective * (1.0 - 1e-9));
+}
