@@ -41,7 +41,11 @@ grasps one whose torque the wrench fixes (its row of Jᵀ a multiple of a combin
 of G's rows), with one side of its limit exactly at that torque, and checks that the
 answer is the one without the limit, in any units. `fuzz_answers.py statuses FROM
 COUNT OTHER_BIN` lists the seeds of the main search whose status differs between this
-binary and OTHER_BIN.
+binary and OTHER_BIN. `fuzz_answers.py infeasible FROM COUNT` solves each of the main
+search's problems that the native exact solver calls infeasible again with Clarabel's
+exact cones, and lists those Clarabel holds with every contact inside its cone
+(friction margins above −1e-3: an answer within the check's tolerance of the largest
+force can leave a small contact well outside).
 
 `fuzz_answers.py joint-units FROM COUNT` solves the sweep's grasps with each joint's
 torque in its own unit (Jᵀ's row times s_j, 10^U(−2, 2), the weight 1/s_j²) and
@@ -393,6 +397,41 @@ def statuses(start, count, other):
     print(f"{count} problems: {changed} statuses differ")
 
 
+def infeasible(start, count):
+    """Seeds FROM.. of the main search that the native exact solver calls infeasible
+    and Clarabel's exact cones hold with every contact inside its cone."""
+    bundled, kinds, held = sources(), {}, 0
+    for seed in range(start, start + count):
+        rnd = random.Random(seed)
+        name, p = rnd.choice(bundled)
+        p = json.loads(json.dumps(p))
+        edits = mutate(rnd, p)
+        d = solve(p, "exact")[0]
+        if not d or d["status"] != "infeasible":
+            continue
+        kind = d["reason"]["kind"]
+        kinds[kind] = kinds.get(kind, 0) + 1
+        with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as f:
+            json.dump(p, f)
+        try:
+            out = subprocess.run([BIN, "solve", f.name, "--format", "json", "--cones", "exact",
+                                  "--backend", "clarabel"], capture_output=True, text=True,
+                                 timeout=60)
+        finally:
+            os.unlink(f.name)
+        try:
+            c = json.loads(out.stdout)
+        except ValueError:
+            continue
+        margins = [m for m in c["diagnostics"].get("friction_margins", []) if m is not None]
+        if c["status"] == "optimal" and min(margins, default=0.0) > -1e-3:
+            held += 1
+            print(f"seed {seed} ({name}: {', '.join(edits)}): infeasible ({kind}), "
+                  f"Clarabel optimal at σ = {c['objective']}")
+    print(f"{count} problems, {sum(kinds.values())} infeasible {kinds}: {held} that "
+          f"Clarabel holds")
+
+
 def main():
     if sys.argv[1] == "moment-arms":
         moment_arms(float(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]))
@@ -400,6 +439,9 @@ def main():
         joint_units(int(sys.argv[2]), int(sys.argv[3]))
     if sys.argv[1] == "pinned-limits":
         pinned_limits(int(sys.argv[2]), int(sys.argv[3]))
+    if sys.argv[1] == "infeasible":
+        infeasible(int(sys.argv[2]), int(sys.argv[3]))
+        sys.exit(0)
     if sys.argv[1] == "statuses":
         statuses(int(sys.argv[2]), int(sys.argv[3]), sys.argv[4])
         sys.exit(0)
