@@ -209,11 +209,7 @@ fn loose_torque_limits_do_not_change_the_answer() {
 /// the grasp was `infeasible`. It is held, with the same σ, in every unit system.
 #[test]
 fn a_contact_the_wrench_leaves_unloaded_is_held_in_any_units() {
-    let path = format!(
-        "{}/../../fixtures/fuzz/unloaded-by-the-wrench.json",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let p = grasp_torque::load_problem(&path).unwrap();
+    let p = fuzz_fixture("unloaded-by-the-wrench");
     for (cones, tol) in [(Cones::Linear, 1e-9), (Cones::Exact, 2e-9)] {
         let base = run(&p, cones);
         assert!(base.is_optimal(), "{cones}: {:?}", base.reason);
@@ -234,29 +230,26 @@ fn a_contact_the_wrench_leaves_unloaded_is_held_in_any_units() {
     }
 }
 
-/// A row set aside as one no torque affects, on a grasp where a joint's tiny row of Jᵀ
-/// sets that rounding level high (`fixtures/fuzz/set-aside-row-held.json`,
-/// `fuzz_answers.py` seed 220): the wrench alone leaves it 5e-10 N below its bound,
-/// within the feasibility tolerance of the wrench's terms. It was `infeasible`; the
-/// answer is cvxpy's optimum, and the core's check holds every row on it.
-#[test]
-fn a_row_set_aside_within_the_tolerance_of_the_wrench_is_held() {
+/// A fuzz fixture.
+fn fuzz_fixture(name: &str) -> GraspProblem {
     let path = format!(
-        "{}/../../fixtures/fuzz/set-aside-row-held.json",
+        "{}/../../fixtures/fuzz/{name}.json",
         env!("CARGO_MANIFEST_DIR")
     );
-    let p = grasp_torque::load_problem(&path).unwrap();
-    // `python3 scripts/oracle_file.py fixtures/fuzz/set-aside-row-held.json` (cvxpy,
-    // exact cones, to its solver's accuracy: 2e-11 from the native σ*).
-    let sigma_star = 3.423746127636e4;
-    let exact = run(&p, Cones::Exact);
+    grasp_torque::load_problem(&path).unwrap()
+}
+
+/// Both cones `optimal`, the exact σ* at `sigma_star` (cvxpy's, to 1e-9) and the
+/// linearised σ not below it.
+fn assert_held_at(p: &GraspProblem, sigma_star: f64) {
+    let exact = run(p, Cones::Exact);
     assert!(exact.is_optimal(), "{:?} {:?}", exact.status, exact.reason);
     assert!(
         (exact.objective - sigma_star).abs() <= 1e-9 * sigma_star,
         "σ* = {} against {sigma_star}",
         exact.objective
     );
-    let linear = run(&p, Cones::Linear);
+    let linear = run(p, Cones::Linear);
     assert!(
         linear.is_optimal(),
         "{:?} {:?}",
@@ -266,36 +259,26 @@ fn a_row_set_aside_within_the_tolerance_of_the_wrench_is_held() {
     assert!(linear.objective >= exact.objective * (1.0 - 1e-9));
 }
 
+/// A row set aside as one no torque affects, on a grasp where a joint's tiny row of Jᵀ
+/// sets that rounding level high (`fixtures/fuzz/set-aside-row-held.json`,
+/// `fuzz_answers.py` seed 220): the wrench alone leaves it 5e-10 N below its bound,
+/// within the feasibility tolerance of the wrench's terms. It was `infeasible`; the
+/// answer is cvxpy's optimum (`python3 scripts/oracle_file.py FILE`, exact cones, 2e-11
+/// from the native σ*), and the core's check holds every row on it.
+#[test]
+fn a_row_set_aside_within_the_tolerance_of_the_wrench_is_held() {
+    assert_held_at(&fuzz_fixture("set-aside-row-held"), 3.423746127636e4);
+}
+
 /// A row that the free torques move, beside a joint whose force response is 1e8 times
 /// the others' (`fixtures/fuzz/row-beside-a-pinned-joint.json`, `fuzz_answers.py` seed
 /// 34182: joint 7's row of Jᵀ made 1e-8 times joint 9's, so the equalities pin its
 /// torque). The largest row of H is that joint's, and a face whose part in the free
 /// torques is 8e-8 of its own norm fell below the rounding level of that largest row:
 /// set aside as one no torque affects, it made the grasp `infeasible` by 42.7 N. Rows
-/// are now also judged against their own norm; the answer is cvxpy's optimum.
+/// are now also judged against their own norm; the answer is cvxpy's optimum (5e-12
+/// from the native σ*).
 #[test]
 fn a_row_beside_a_pinned_joint_is_not_set_aside() {
-    let path = format!(
-        "{}/../../fixtures/fuzz/row-beside-a-pinned-joint.json",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let p = grasp_torque::load_problem(&path).unwrap();
-    // `python3 scripts/oracle_file.py fixtures/fuzz/row-beside-a-pinned-joint.json`
-    // (cvxpy, exact cones; 5e-12 from the native σ*).
-    let sigma_star = 1.545814591206;
-    let exact = run(&p, Cones::Exact);
-    assert!(exact.is_optimal(), "{:?} {:?}", exact.status, exact.reason);
-    assert!(
-        (exact.objective - sigma_star).abs() <= 1e-9 * sigma_star,
-        "σ* = {} against {sigma_star}",
-        exact.objective
-    );
-    let linear = run(&p, Cones::Linear);
-    assert!(
-        linear.is_optimal(),
-        "{:?} {:?}",
-        linear.status,
-        linear.reason
-    );
-    assert!(linear.objective >= exact.objective * (1.0 - 1e-9));
+    assert_held_at(&fuzz_fixture("row-beside-a-pinned-joint"), 1.545814591206);
 }
