@@ -599,13 +599,13 @@ impl Engine {
         let rounding = 1e3 * f64::EPSILON * (m as f64);
         let zero = rounding * hscale.max(f64::MIN_POSITIVE);
         // A cone row is also judged against its own norm, at the model's resolution
-        // (its default rank tolerance, 1e-9): where one joint's force response is 1e8 times the
-        // others' (a tiny row of Jᵀ), the largest row is that joint's, whose torque
-        // the equalities pin, and a row whose part in y is 8e-8 of its own norm fell
-        // below the first bound (fuzz seed 34182: infeasible, where cvxpy finds σ* =
-        // 1.55). Only a row below both is one no torque affects. (Against its own norm
-        // at rounding level instead, a tendon hand's row of part 6e-12, the model's
-        // conditioning, was kept and broke the solve.)
+        // (its default rank tolerance, 1e-9): where one joint's force response is 1e8
+        // times the others' (a tiny row of Jᵀ), the largest row is that joint's, whose
+        // torque the equalities pin, and a row whose part in y is 8e-8 of its own norm
+        // fell below the first bound (fuzz seed 34182: infeasible, where cvxpy finds
+        // σ* = 1.55). Only a row below both is one no torque affects. (Against its own
+        // norm at rounding level instead, a tendon hand's row of part 6e-12, the
+        // model's conditioning, was kept and broke the solve.)
         let resolution = grasp_core::ModelOptions::default()
             .rank_tolerance
             .max(rounding);
