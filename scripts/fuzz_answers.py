@@ -177,6 +177,8 @@ def in_units(p, F, L):
             c["mu_torsion"] *= L
     force = ~np.array(moment)
     G[3:, force] *= L
+    # (A force row's entry on a moment component, zero unless perturbed, is per length.)
+    G[:3, ~force] /= L
     JT[:, force] *= L
     q["grasp_matrix"], q["jacobian_transpose"] = G.tolist(), JT.tolist()
     q["wrench"] = [v * F for v in q["wrench"][:3]] + [v * F * L for v in q["wrench"][3:]]

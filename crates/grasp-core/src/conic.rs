@@ -860,7 +860,10 @@ fn factored_equalities(
     } else {
         Matrix::zeros(m, 0)
     };
-    // x₀ = diag(g) B diag(ν), then less N Nᵀ x₀.
+    // x₀ = diag(g) B diag(ν), then less N Nᵀ x₀, twice: x₀'s rows spread as g does, so
+    // that one pass leaves a part in N of ε times x₀'s largest row (1e-8 of the answer
+    // where one joint's arms are 1e9 times the others', which the certificate's
+    // stationarity then read), and the second takes that to ε of what remains.
     let mut pinv = Matrix::from_fn(m + d, p, |i, j| {
         if i < m {
             g[i] * b[(i, j)] * norms[j]
@@ -868,12 +871,14 @@ fn factored_equalities(
             0.0
         }
     });
-    for j in 0..p {
-        let ntx: Vec<f64> = (0..k)
-            .map(|c| (0..m).map(|i| null[(i, c)] * pinv[(i, j)]).sum())
-            .collect();
-        for i in 0..m {
-            pinv[(i, j)] -= (0..k).map(|c| null[(i, c)] * ntx[c]).sum::<f64>();
+    for _ in 0..2 {
+        for j in 0..p {
+            let ntx: Vec<f64> = (0..k)
+                .map(|c| (0..m).map(|i| null[(i, c)] * pinv[(i, j)]).sum())
+                .collect();
+            for i in 0..m {
+                pinv[(i, j)] -= (0..k).map(|c| null[(i, c)] * ntx[c]).sum::<f64>();
+            }
         }
     }
     // Nᵀ: the torques' basis, then each free direction.

@@ -387,9 +387,10 @@ fn explicit_q(w: &[f64], len: usize, k: usize, vhead: &[f64], tau: &[f64]) -> Ve
 /// 1e-8 of the others', which the consistency equalities' null space pins to 1e-8 of
 /// their torques: products with the large columns of H that such a joint has left a
 /// feasible grasp 1e-9 short of its cones). There the basis is `y R⁻¹`, twice
-/// (`range_pass`): each of its rows is y's row times a k × k matrix, so it keeps its
-/// digits relative to its own size; the first pass is orthonormal to ε times R's
-/// condition, the second to ε.
+/// (`range_pass`), of y or, where R is too ill conditioned for that, of the graded
+/// basis of y's range (`graded_range`): each of its rows is y's row times a k × k
+/// matrix, so it keeps its digits relative to its own size; the first pass is
+/// orthonormal to ε times R's condition, the second to ε.
 pub fn orthonormal_columns(y: &Matrix) -> Option<Matrix> {
     let (len, k) = (y.nrows(), y.ncols());
     let big = finite_max_abs(y.as_slice())?;
@@ -405,7 +406,12 @@ pub fn orthonormal_columns(y: &Matrix) -> Option<Matrix> {
         (if r > 0.0 { lo.min(r) } else { lo }, hi.max(r))
     });
     if hi > ROW_SPREAD * lo {
-        return range_pass(&range_pass(y)?);
+        // Rows far apart in size. Where fewer rows are large than y has columns, y's
+        // columns are near parallel and R too ill conditioned for a basis: then that
+        // of the graded basis of the same range (`graded_range`).
+        return range_pass(y)
+            .and_then(|q| range_pass(&q))
+            .or_else(|| range_pass(&range_pass(&graded_range(y)?)?));
     }
     let mut w = longer_side(y);
     let (mut vhead, mut tau) = (vec![0.0; k], vec![0.0; k]);
@@ -441,6 +447,64 @@ pub fn orthonormal_columns(y: &Matrix) -> Option<Matrix> {
 /// The spread of row norms past which [`orthonormal_columns`] forms its basis row by
 /// row: Q's error of ε is then up to 1e-12 of a small row.
 pub const ROW_SPREAD: f64 = 1e4;
+
+/// A basis of the range of `y` (tall, finite) whose columns are near orthogonal even
+/// where y's rows differ in size by many orders, with each row a combination of y's row
+/// alone: `y V` for an orthogonal k × k V made of reflections from the right, one per
+/// row taken in order of size (the largest first, of what earlier reflections left),
+/// each zeroing that row past one column. The largest row then sits in one column and
+/// the next columns see only the smaller rows, so that no column is a small remainder
+/// of a large one; each column is scaled to unit length. (Householder QR of y itself
+/// mixes the rows: its R is as ill conditioned as y's columns are, a joint with moment
+/// arms 1e9 times the others' next to one pinned at 1e-8 of them made it 1e-16, and no
+/// basis was found.) `None` if a column is left without a nonzero row.
+fn graded_range(y: &Matrix) -> Option<Matrix> {
+    let (len, k) = (y.nrows(), y.ncols());
+    let mut l = y.clone();
+    let mut done = vec![false; len];
+    let mut v = vec![0.0; k];
+    for t in 0..k.min(len) {
+        // The remaining row with the largest part in columns t..k.
+        let (mut best, mut size) = (usize::MAX, 0.0f64);
+        for i in (0..len).filter(|&i| !done[i]) {
+            let r = crate::matrix::norm2(&l.row(i)[t..]);
+            if r > size {
+                (best, size) = (i, r);
+            }
+        }
+        if best == usize::MAX {
+            return None;
+        }
+        done[best] = true;
+        // The reflection I − 2 v vᵀ/(vᵀv) mapping that part onto ±size e_t.
+        let row = &l.row(best)[t..];
+        let head = row[0];
+        let alpha = if head >= 0.0 { -size } else { size };
+        v[t..].copy_from_slice(row);
+        v[t] -= alpha;
+        let vv = crate::matrix::norm2(&v[t..]).powi(2);
+        if vv > 0.0 {
+            for i in 0..len {
+                let r = &mut l.row_mut(i)[t..];
+                let d: f64 = r.iter().zip(&v[t..]).map(|(a, b)| a * b).sum();
+                let f = 2.0 * d / vv;
+                r.iter_mut().zip(&v[t..]).for_each(|(a, b)| *a -= f * b);
+            }
+        }
+        // (Exactly what the reflection makes of that row.)
+        let r = &mut l.row_mut(best)[t..];
+        r.fill(0.0);
+        r[0] = alpha;
+    }
+    for j in 0..k {
+        let norm = (0..len).map(|i| l[(i, j)] * l[(i, j)]).sum::<f64>().sqrt();
+        if !(norm > 0.0 && norm.is_finite()) {
+            return None;
+        }
+        (0..len).for_each(|i| l[(i, j)] /= norm);
+    }
+    Some(l)
+}
 
 /// `y R⁻¹` with R from the Householder QR of `y` (tall, finite), when R shows full
 /// column rank clearly ([`orthonormal_columns`]).
@@ -983,6 +1047,38 @@ mod tests {
                         .map(|(a, b)| a - b)
                         .collect::<Vec<_>>(),
                 );
+                let size = crate::matrix::norm2(y.row(i));
+                assert!(
+                    err <= 1e3 * f64::EPSILON * size,
+                    "{len}×{k} row {i}: {err:e} of {size:e}"
+                );
+            }
+        }
+    }
+
+    /// Fewer large rows than columns: one row 1e8, one 1e-8, the rest of size 1, so
+    /// that every column of y is mostly its first row and y's columns are 1e-8 from
+    /// parallel (the torques' scales of a joint with moment arms 1e9 times the
+    /// others' beside one the equalities pin, `fuzz_answers.py` seed 89215). R of y's
+    /// own QR is then too ill conditioned for a basis (there was none); the graded
+    /// range is not: orthonormal, and each row's digits kept, as above.
+    #[test]
+    fn orthonormal_columns_of_nearly_parallel_graded_columns() {
+        let mut next = uniform(11);
+        for (len, k) in [(9, 3), (12, 5), (6, 2)] {
+            let g = |i: usize| match i {
+                0 => 1e8,
+                1 => 1e-8,
+                _ => 1.0,
+            };
+            let y = Matrix::from_fn(len, k, |i, _| g(i) * next());
+            let q = orthonormal_columns(&y).expect("a basis");
+            assert_orthonormal(&q);
+            let r = q.transpose().matmul(&y);
+            for i in 0..len {
+                let err = (0..k)
+                    .map(|j| (0..k).map(|l| q[(i, l)] * r[(l, j)]).sum::<f64>() - y[(i, j)])
+                    .fold(0.0f64, |a, v| a.max(v.abs()));
                 let size = crate::matrix::norm2(y.row(i));
                 assert!(
                     err <= 1e3 * f64::EPSILON * size,

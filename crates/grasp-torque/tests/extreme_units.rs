@@ -10,7 +10,9 @@
 //! squares (`infeasible`); torques at 1e-155 of the forces' scale gave NaN torques.
 #![cfg(feature = "active-set")]
 
-use grasp_torque::{solve, Backend, Cones, GraspProblem, Solution, SolverConfig, WarmStart};
+use grasp_torque::{
+    solve, Backend, Cones, GraspProblem, Solution, SolverConfig, Status, WarmStart,
+};
 
 fn run(p: &GraspProblem, cones: Cones) -> Solution {
     let config = SolverConfig {
@@ -281,4 +283,48 @@ fn a_row_set_aside_within_the_tolerance_of_the_wrench_is_held() {
 #[test]
 fn a_row_beside_a_pinned_joint_is_not_set_aside() {
     assert_held_at(&fuzz_fixture("row-beside-a-pinned-joint"), 1.545814591206);
+}
+
+/// A joint whose moment arms are 8e8 times the others' beside one the equalities pin
+/// (`fixtures/fuzz/long-arm-beside-a-pinned-joint.json`, `fuzz_answers.py` seed 89215:
+/// joint 2's row of Jᵀ made 1e-8 of joint 1's). The equalities' null basis came from a
+/// decomposition of C D⁻¹, whose columns span 1e18, and missed the rows by 3e-9 of
+/// their terms (ε times the largest column): with lengths × 0.087 and forces × 28, the
+/// linear answer spent that slack on a squeeze of 1700 N and a σ 1.3e-4 below the
+/// optimum, and the exact σ* was `optimal` at 3.3e-7 above it. The basis now keeps each
+/// row's digits (`orthonormal_columns` in grasp-core): in every unit system tried the
+/// linear σ is DAQP's optimum of the exported QP (9.156345108e8, 2e-12 apart in SI and
+/// in those units, which the exact cones do not better here), and the exact one too:
+/// `optimal` within the certificate's 2e-9, or `almost_optimal` (the interior-point
+/// method's gap on this conditioning, up to 7e-8) within the bound it states.
+#[test]
+fn a_long_arm_beside_a_pinned_joint_keeps_the_equalities() {
+    let p = fuzz_fixture("long-arm-beside-a-pinned-joint");
+    let sigma_star = 9.156345108e8;
+    for l in [1e-3, 0.0866, 1.0, 11.5, 1e3] {
+        for f in [1e-3, 1.0, 28.25, 1e3] {
+            let q = grasp_testkit::rescale(&p, l, f);
+            for cones in [Cones::Linear, Cones::Exact] {
+                let s = run(&q, cones);
+                let at = format!("{cones}, lengths × {l:e}, forces × {f:e}");
+                let bound = match s.status {
+                    Status::Optimal if cones == Cones::Linear => 1e-9,
+                    Status::Optimal => 2e-9,
+                    Status::AlmostOptimal if cones == Cones::Exact => stated_bound(&s),
+                    _ => panic!("{at}: {:?} {:?}", s.status, s.reason),
+                };
+                let r = (sigma_back(&p, &s, l * f) - sigma_star) / sigma_star;
+                assert!(r >= -1e-9 && r <= bound + 1e-9, "{at}: σ off by {r:e}");
+            }
+        }
+    }
+}
+
+/// The bound an `almost_optimal` exact answer states in its warning.
+fn stated_bound(s: &Solution) -> f64 {
+    s.warnings
+        .iter()
+        .find_map(|w| w.strip_prefix("the exact-cone answer's certificate bounds σ only to "))
+        .and_then(|w| w.split(' ').next()?.parse().ok())
+        .expect("the bound in a warning")
 }
