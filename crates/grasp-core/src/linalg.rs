@@ -455,9 +455,10 @@ pub const ROW_SPREAD: f64 = 1e4;
 /// each zeroing that row past one column. The largest row then sits in one column and
 /// the next columns see only the smaller rows, so that no column is a small remainder
 /// of a large one; each column is scaled to unit length. (Householder QR of y itself
-/// mixes the rows: its R is as ill conditioned as y's columns are, a joint with moment
-/// arms 1e9 times the others' next to one pinned at 1e-8 of them made it 1e-16, and no
-/// basis was found.) `None` if a column is left without a nonzero row.
+/// mixes the rows: its R is as ill conditioned as y's columns are, and beside a joint
+/// with moment arms 8e8 times the others' and one pinned at 1e-8 of them its diagonal
+/// spread past the 1e6 that [`range_pass`] admits, so that there was no basis.) `None`
+/// if a column is left without a nonzero row.
 fn graded_range(y: &Matrix) -> Option<Matrix> {
     let (len, k) = (y.nrows(), y.ncols());
     let mut l = y.clone();
