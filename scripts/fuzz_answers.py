@@ -47,6 +47,12 @@ exact cones, and lists those Clarabel holds with every contact inside its cone
 (friction margins above −1e-3: an answer within the check's tolerance of the largest
 force can leave a small contact well outside).
 
+`fuzz_answers.py nested FROM COUNT` solves each of the main search's problems with
+linear cones at N = 4, 8, 16, 32 and 64 and with exact cones, and lists every pair of
+runs where more sides (or the exact cones) give a higher optimal σ or call a grasp
+infeasible that fewer sides hold: each polygon's vertices are among the next one's, so
+either is a wrong answer.
+
 `fuzz_answers.py joint-units FROM COUNT` solves the sweep's grasps with each joint's
 torque in its own unit (Jᵀ's row times s_j, 10^U(−2, 2), the weight 1/s_j²) and
 compares status and σ with the SI answer. `fuzz_answers.py moment-arms SCALE FROM
@@ -193,12 +199,12 @@ def in_units(p, F, L):
     return q
 
 
-def solve(p, cones):
+def solve(p, cones, *extra):
     """The answer as JSON, or None and why."""
     with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as f:
         json.dump(p, f)
     try:
-        out = subprocess.run([BIN, "solve", f.name, "--format", "json", "--cones", cones],
+        out = subprocess.run([BIN, "solve", f.name, "--format", "json", "--cones", cones, *extra],
                              capture_output=True, text=True, timeout=60)
     except subprocess.TimeoutExpired:
         return None, "hung (60 s)"
@@ -434,6 +440,34 @@ def infeasible(start, count):
           f"Clarabel holds")
 
 
+def nested(start, count):
+    """Seeds FROM.. of the main search with linear cones at N = 4, 8, 16, 32 and 64 sides
+    and exact cones. Each polygon's vertices are among the next one's (every N-th angle,
+    the same latitudes), so each polyhedron contains the last and the exact cone all of
+    them: σ falls as N grows, and a grasp held at N is held at 2N. An optimal answer
+    above one for fewer sides is not optimal; every pair of runs is compared."""
+    bundled, problems, solved = sources(), 0, 0
+    for seed in range(start, start + count):
+        rnd = random.Random(seed)
+        name, p = rnd.choice(bundled)
+        p = json.loads(json.dumps(p))
+        edits = mutate(rnd, p)
+        runs = [(f"N = {n}", solve(p, "linear", "--sides", str(n))[0]) for n in (4, 8, 16, 32, 64)]
+        runs.append(("exact", solve(p, "exact")[0]))
+        for (a, da), (b, db) in ((x, y) for i, x in enumerate(runs) for y in runs[i + 1:]):
+            sa, sb = (da or {}).get("status"), (db or {}).get("status")
+            if sa == "optimal" and sb == "infeasible":
+                print(f"seed {seed} ({name}: {', '.join(edits)}): optimal at {a}, infeasible at {b}")
+                problems += 1
+            elif sa == sb == "optimal":
+                solved += 1
+                if db["objective"] > da["objective"] * (1 + 1e-7):
+                    print(f"seed {seed} ({name}: {', '.join(edits)}): σ {db['objective']} at {b} "
+                          f"above σ {da['objective']} at {a}")
+                    problems += 1
+    print(f"{count} problems, {solved} pairs both optimal: {problems} contradictions")
+
+
 def main():
     if sys.argv[1] == "moment-arms":
         moment_arms(float(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]))
@@ -443,6 +477,9 @@ def main():
         pinned_limits(int(sys.argv[2]), int(sys.argv[3]))
     if sys.argv[1] == "infeasible":
         infeasible(int(sys.argv[2]), int(sys.argv[3]))
+        sys.exit(0)
+    if sys.argv[1] == "nested":
+        nested(int(sys.argv[2]), int(sys.argv[3]))
         sys.exit(0)
     if sys.argv[1] == "statuses":
         statuses(int(sys.argv[2]), int(sys.argv[3]), sys.argv[4])

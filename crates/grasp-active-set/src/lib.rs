@@ -247,6 +247,11 @@ struct Engine {
     fixed: Vec<usize>,
     fixed_c0: Vec<f64>,
     fixed_m: Matrix,
+    /// Per fixed row, whether its part in y is above the rounding of its own norm: set
+    /// aside beside a far larger row (below the model's resolution of its own norm and
+    /// the rounding of the largest row), it is still moved by the free torques, so
+    /// its violation at y = 0 proves nothing; the core's check of the answer judges it.
+    fixed_moved: Vec<bool>,
     /// The largest `|m_ij|` of any row (fixed or not) per wrench component `j`: a fixed
     /// row's value is judged against `Σ_j |m_ij w_j|` of these, in force units.
     wrench_terms: [f64; 6],
@@ -616,7 +621,8 @@ impl Engine {
             (RowId::TorqueLimit { .. }, _) => rounding * own[i],
             _ => zero.min(resolution * own[i]),
         };
-        let (mut h_row, mut fixed) = (Vec::with_capacity(rows), Vec::new());
+        let (mut h_row, mut fixed, mut fixed_moved) =
+            (Vec::with_capacity(rows), Vec::new(), Vec::new());
         let mut nu = Vec::with_capacity(rows);
         let mut red_row = vec![usize::MAX; rows];
         // A fixed row whose wrench terms are themselves rounding (a contact that neither
@@ -631,6 +637,7 @@ impl Engine {
                 nu.push(nrm);
             } else {
                 fixed.push(i);
+                fixed_moved.push(nrm > rounding * own[i]);
             }
             for (t, v) in wrench_terms.iter_mut().zip(mfull(i)) {
                 *t = t.max(v.abs());
@@ -702,6 +709,7 @@ impl Engine {
             fixed,
             fixed_c0,
             fixed_m,
+            fixed_moved,
             wrench_terms,
             ws,
             hot: hot::HotMap::new(k, nr, m),
@@ -753,7 +761,11 @@ impl Engine {
         out.iterations = 0;
         let active = out.active_set.get_or_insert_with(Vec::new);
         active.clear();
-        // Rows that no torque affects must hold for the wrench alone.
+        // Rows that no torque affects must hold for the wrench alone (a row the free
+        // torques still move, set aside beside a far larger one, is left to the core's
+        // check of the answer: `fuzz_answers.py nested` seed 48783, a face whose part in
+        // y was 26 beside rows of 1e13, called the grasp infeasible by 2.1 at N = 16
+        // where the answer at N = 8 holds it).
         for (r, &row) in self.fixed.iter().enumerate() {
             let c = self.fixed_c0[r] - dot(self.fixed_m.row(r), w);
             // Relative to the row's own terms and to the wrench's largest terms in any
@@ -764,7 +776,7 @@ impl Engine {
             // where the floor was ‖w‖∞ times the largest row's terms.
             let size = |m: &[f64]| m.iter().zip(w).map(|(a, b)| (a * b).abs()).sum::<f64>();
             let scale = self.c0[row].abs() + size(self.fixed_m.row(r)) + size(&self.wrench_terms);
-            if c > self.settings.feasibility_tolerance * scale {
+            if c > self.settings.feasibility_tolerance * scale && !self.fixed_moved[r] {
                 out.status = Status::Infeasible;
                 out.reason = Some(Reason::FixedRowViolated {
                     row: self.rows[row],

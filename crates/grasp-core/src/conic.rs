@@ -605,6 +605,13 @@ impl ConicForm {
         let stationarity = residual / colsize;
         let finite =
             basis_ok && all_finite(&b[..rows]) && all_finite(&xp[..nx]) && all_finite(&z[eq..rows]);
+        let horizon = if value >= 0.0 {
+            0.0
+        } else if residual > 0.0 {
+            -value / residual
+        } else {
+            f64::INFINITY
+        };
         let (dual, value) = (dual / zmax, value / vsize);
         // With no free direction, x_p is the only point meeting the equalities: the ray
         // has no horizon, and a value beyond the tolerance proves.
@@ -617,11 +624,28 @@ impl ConicForm {
             stationarity,
             value,
             particular,
+            horizon,
             passed: finite
                 && dual <= tol
                 && stationarity <= tol
                 && particular <= tol
                 && value < -margin * tol,
+        }
+    }
+
+    /// `‖Nᵀ (x − x_p)‖₁` for x and x_p meeting the equalities (`‖x − x_p‖₁` without
+    /// them): the free directions' coordinates of x from x_p, the distance a dual ray's
+    /// [`RayCheck::horizon`] is measured in.
+    pub fn ray_distance(&self, xp: &[f64], x: &[f64]) -> f64 {
+        let nx = self.nx;
+        match &self.eq_null_t {
+            None => x[..nx].iter().zip(xp).map(|(a, b)| (a - b).abs()).sum(),
+            Some(nt) => (0..nt.nrows())
+                .map(|r| {
+                    let terms = nt.row(r).iter().zip(&x[..nx]).zip(xp);
+                    terms.map(|((n, a), b)| n * (a - b)).sum::<f64>().abs()
+                })
+                .sum(),
         }
     }
 
@@ -965,6 +989,11 @@ pub struct RayCheck {
     pub value: f64,
     /// How far `x_p` misses the equalities, each row against `|b_i| + ‖a_i‖₁ ‖x_p‖∞`.
     pub particular: f64,
+    /// How far from `x_p` the ray reaches: no x meeting the equalities closer than
+    /// this, by [`ConicForm::ray_distance`], has `s ∈ K` (`zᵀ s` is the value's
+    /// `zᵀ s_p` less the torque terms' `(Nᵀ A_inᵀ z)ᵀ y`, at most
+    /// `‖Nᵀ A_inᵀ z‖∞ ‖y‖₁`). Infinite where no direction is free.
+    pub horizon: f64,
     /// Whether `z` proves the problem infeasible: every measure within the tolerance
     /// and `value` below −[`RAY_MARGIN`] times it (below −tolerance where the equalities
     /// leave no free direction: no torque but `x_p` meets them).

@@ -320,6 +320,69 @@ fn a_long_arm_beside_a_pinned_joint_keeps_the_equalities() {
     }
 }
 
+/// A face the free torques move only at 3e-11 of its own norm, beside rows of 1.4e13
+/// (`fixtures/fuzz/face-moved-beside-a-pinned-joint.json`, `fuzz_answers.py nested`
+/// seed 48783: joint 3's row of Jᵀ reduced to one tiny entry). Its part in y, 26, is
+/// below both bounds for a row no torque affects, so it is set aside; the wrench alone
+/// misses it by 2.1, which made the grasp `infeasible` at N = 16, 32 and 64 although
+/// the answer at N = 8 holds it (each polygon's vertices are the next one's). Such a
+/// row's violation at y = 0 now proves nothing, and the core's check judges the
+/// answer: σ falls as N doubles, down to cvxpy's σ* (`scripts/oracle_file.py`).
+#[test]
+fn a_face_the_free_torques_barely_move_is_no_proof_of_infeasibility() {
+    let p = fuzz_fixture("face-moved-beside-a-pinned-joint");
+    let sigma_star = 7.692612522668e-2;
+    let exact = run(&p, Cones::Exact);
+    assert!(exact.is_optimal(), "{:?} {:?}", exact.status, exact.reason);
+    assert!((exact.objective - sigma_star).abs() <= 1e-9 * sigma_star);
+    let mut last = f64::INFINITY;
+    for sides in [8, 16, 32, 64] {
+        let mut q = p.clone();
+        q.linearization.sides = sides;
+        let s = run(&q, Cones::Linear);
+        assert!(s.is_optimal(), "N = {sides}: {:?} {:?}", s.status, s.reason);
+        assert!(
+            s.objective <= last * (1.0 + 1e-9),
+            "N = {sides}: σ {} after {last}",
+            s.objective
+        );
+        assert!(
+            s.objective >= sigma_star * (1.0 - 1e-9),
+            "N = {sides}: σ {} below σ*",
+            s.objective
+        );
+        last = s.objective;
+    }
+}
+
+/// A dual ray that reaches no further than the circumscribed polyhedra's optimum
+/// (`fixtures/fuzz/dual-ray-short-of-the-polyhedra.json`, `fuzz_answers.py nested`
+/// seed 7105: the Ability tripod with a joint limited to τ ≤ 0 and a torsional length
+/// of 4.7e-6). The interior-point method's multipliers passed the ray's check, but no
+/// feasible torque was excluded beyond 1.458e4 from the equalities' point in the scaled
+/// variables, and the polyhedra's optimum lies at 1.462e4: the grasp was `infeasible`,
+/// where the inscribed polyhedra at N = 32 and 64 and Clarabel hold it. A ray must now
+/// reach a thousand times that far; the answer is Clarabel's σ* (0.5592541096066).
+#[test]
+fn a_dual_ray_short_of_the_polyhedra_proves_nothing() {
+    let p = fuzz_fixture("dual-ray-short-of-the-polyhedra");
+    let sigma_star = 0.5592541096066;
+    let exact = run(&p, Cones::Exact);
+    assert!(exact.is_optimal(), "{:?} {:?}", exact.status, exact.reason);
+    assert!(
+        (exact.objective - sigma_star).abs() <= 1e-9 * sigma_star,
+        "σ* = {}",
+        exact.objective
+    );
+    for sides in [32, 64] {
+        let mut q = p.clone();
+        q.linearization.sides = sides;
+        let s = run(&q, Cones::Linear);
+        assert!(s.is_optimal(), "N = {sides}: {:?} {:?}", s.status, s.reason);
+        assert!(s.objective >= exact.objective * (1.0 - 1e-9));
+    }
+}
+
 /// The bound an `almost_optimal` exact answer states in its warning.
 fn stated_bound(s: &Solution) -> f64 {
     s.warnings
