@@ -383,6 +383,40 @@ fn a_dual_ray_short_of_the_polyhedra_proves_nothing() {
     }
 }
 
+/// The dual phase's iterate is its key set's minimiser only in exact arithmetic
+/// (`fixtures/fuzz/iterate-beside-its-minimiser.json`, `fuzz_answers.py nested` seed
+/// 154509: the Ability tripod with joint 2's row of Jᵀ reduced to one entry of 6.4e-11,
+/// its column of H 1e10 times the others'). At N = 16 the final key set is three faces
+/// whose normals agree to 1e-9, and the iterate, 5 % from their minimiser, was returned
+/// as optimal: σ 2.2e-3 above the optimum, and above σ at N = 8. Steps 2–4 now walk it
+/// to the minimiser. σ(16) is cvxpy's on the exported QP with joint 2's column scaled to
+/// 1 (0.11635157761732), and the minimum-norm point of those three faces in 50-digit
+/// arithmetic (0.11635157761726).
+#[test]
+fn the_dual_iterate_is_no_answer_until_it_is_the_minimiser() {
+    let mut p = fuzz_fixture("iterate-beside-its-minimiser");
+    let sigma16 = 0.1163515776173;
+    p.linearization.sides = 16;
+    let s = run(&p, Cones::Linear);
+    assert!(s.is_optimal(), "{:?} {:?}", s.status, s.reason);
+    assert!(
+        (s.objective - sigma16).abs() <= 1e-9 * sigma16,
+        "σ(16) = {}",
+        s.objective
+    );
+    p.linearization.sides = 8;
+    let s8 = run(&p, Cones::Linear);
+    assert!(s8.is_optimal(), "{:?} {:?}", s8.status, s8.reason);
+    assert!(
+        s.objective <= s8.objective * (1.0 + 1e-9),
+        "σ(8) = {}",
+        s8.objective
+    );
+    let exact = run(&p, Cones::Exact);
+    assert!(exact.is_optimal(), "{:?} {:?}", exact.status, exact.reason);
+    assert!(exact.objective <= s.objective * (1.0 + 1e-9));
+}
+
 /// The bound an `almost_optimal` exact answer states in its warning.
 fn stated_bound(s: &Solution) -> f64 {
     s.warnings
