@@ -40,12 +40,13 @@ docs/solver.md, "Limits").
 grasps one whose torque the wrench fixes (its row of Jᵀ a multiple of a combination
 of G's rows), with one side of its limit exactly at that torque, and checks that the
 answer is the one without the limit, in any units. `fuzz_answers.py statuses FROM
-COUNT OTHER_BIN` lists the seeds of the main search whose status differs between this
-binary and OTHER_BIN. `fuzz_answers.py infeasible FROM COUNT` solves each of the main
-search's problems that the native exact solver calls infeasible again with Clarabel's
-exact cones, and lists those Clarabel holds with every contact inside its cone
-(friction margins above −1e-3: an answer within the check's tolerance of the largest
-force can leave a small contact well outside).
+COUNT OTHER_BIN [N...]` lists the seeds of the main search whose status, or optimal σ
+beyond 1e-12, differs between this binary and OTHER_BIN (exact cones, and linear ones
+at each N given, else at the file's). `fuzz_answers.py infeasible FROM COUNT` solves
+each of the main search's problems that the native exact solver calls infeasible again
+with Clarabel's exact cones, and lists those Clarabel holds with every contact inside
+its cone (friction margins above −1e-3: an answer within the check's tolerance of the
+largest force can leave a small contact well outside).
 
 `fuzz_answers.py nested FROM COUNT` solves each of the main search's problems with
 linear cones at N = 4, 8, 16, 32 and 64 and with exact cones, and lists every pair of
@@ -383,26 +384,33 @@ def pinned_limits(start, count):
     sys.exit(1 if problems else 0)
 
 
-def statuses(start, count, other):
+def statuses(start, count, other, sides=()):
     """Seeds FROM.. of the main search solved by this binary and by `other` (an older
-    commit's, say): each status that differs, linear and exact."""
-    bundled, changed = sources(), 0
+    commit's, say): each status that differs, and each σ that differs by more than
+    1e-12 relative where both are optimal; exact cones, and linear ones at the file's
+    N or at each of `sides`."""
+    bundled, changed, moved = sources(), 0, 0
     global BIN
+    runs = [("exact", ())] + ([("linear", ("--sides", str(n))) for n in sides] or [("linear", ())])
     for seed in range(start, start + count):
         rnd = random.Random(seed)
         name, p = rnd.choice(bundled)
         p = json.loads(json.dumps(p))
         edits = mutate(rnd, p)
-        for cones in ("linear", "exact"):
-            here = solve(p, cones)[0]
+        for cones, extra in runs:
+            here = solve(p, cones, *extra)[0] or {}
             BIN, mine = other, BIN
-            there = solve(p, cones)[0]
+            there = solve(p, cones, *extra)[0] or {}
             BIN = mine
-            a, b = (there or {}).get("status"), (here or {}).get("status")
+            a, b = there.get("status"), here.get("status")
+            what = f"seed {seed} ({name}: {', '.join(edits)}) {cones} {' '.join(extra)}".rstrip()
             if a != b:
-                print(f"seed {seed} ({name}: {', '.join(edits)}) {cones}: {a} there, {b} here")
+                print(f"{what}: {a} there, {b} here")
                 changed += 1
-    print(f"{count} problems: {changed} statuses differ")
+            elif a == "optimal" and abs(there["objective"] - here["objective"]) > 1e-12 * abs(there["objective"]):
+                print(f"{what}: σ {there['objective']!r} there, {here['objective']!r} here")
+                moved += 1
+    print(f"{count} problems: {changed} statuses differ, {moved} optimal σ differ by more than 1e-12")
 
 
 def infeasible(start, count):
@@ -482,7 +490,7 @@ def main():
         nested(int(sys.argv[2]), int(sys.argv[3]))
         sys.exit(0)
     if sys.argv[1] == "statuses":
-        statuses(int(sys.argv[2]), int(sys.argv[3]), sys.argv[4])
+        statuses(int(sys.argv[2]), int(sys.argv[3]), sys.argv[4], [int(n) for n in sys.argv[5:]])
         sys.exit(0)
     start, count = int(sys.argv[1]), int(sys.argv[2])
     problems, counts = 0, {}
