@@ -391,7 +391,7 @@ fn a_dual_ray_short_of_the_polyhedra_proves_nothing() {
 /// as optimal: σ 2.2e-3 above the optimum, and above σ at N = 8. Steps 2–4 now walk it
 /// to the minimiser. σ(16) is cvxpy's on the exported QP with joint 2's column scaled to
 /// 1 (0.11635157761732), and the minimum-norm point of those three faces in 50-digit
-/// arithmetic (0.11635157761726).
+/// arithmetic (0.11635157761726), in any units.
 #[test]
 fn the_dual_iterate_is_no_answer_until_it_is_the_minimiser() {
     let mut p = fuzz_fixture("iterate-beside-its-minimiser");
@@ -415,6 +415,25 @@ fn the_dual_iterate_is_no_answer_until_it_is_the_minimiser() {
     let exact = run(&p, Cones::Exact);
     assert!(exact.is_optimal(), "{:?} {:?}", exact.status, exact.reason);
     assert!(exact.objective <= s.objective * (1.0 + 1e-9));
+    // The same answer in other units.
+    p.linearization.sides = 16;
+    for unit in [Unit::Force, Unit::Torque, Unit::Everything] {
+        for c in [1e-3, 37.0, 1e3] {
+            let (q, factor) = rescaled(&p, unit, c);
+            let s = run(&q, Cones::Linear);
+            assert!(
+                s.is_optimal(),
+                "{unit:?} × {c}: {:?} {:?}",
+                s.status,
+                s.reason
+            );
+            let back = sigma_back(&q, &s, factor);
+            assert!(
+                (back - sigma16).abs() <= 1e-9 * sigma16,
+                "{unit:?} × {c}: σ(16) = {back}"
+            );
+        }
+    }
 }
 
 /// The bound an `almost_optimal` exact answer states in its warning.
