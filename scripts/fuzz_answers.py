@@ -225,15 +225,22 @@ def wrong(p, d):
     tau = np.array(d["torque"], float)
     # Jᵀ f = T u + τ_p with a transmission T and passive torques τ_p (u: the answer's
     # torques, per actuator).
-    joint = np.array(p["transmission"], float) @ tau if p.get("transmission") else tau
-    joint = joint + np.array(p.get("passive_torque") or np.zeros(len(joint)), float)
+    T = np.array(p["transmission"], float) if p.get("transmission") else np.eye(len(tau))
+    passive = np.array(p.get("passive_torque") or np.zeros(T.shape[0]), float)
+    joint = T @ tau + passive
     if not (np.all(np.isfinite(f)) and np.all(np.isfinite(tau)) and math.isfinite(d["objective"])):
         return ["non-finite"]
     out = []
-    fmax = np.abs(f).max()
-    for name, A, target in (("G f − w", G, w), ("Jᵀ f − τ", JT, joint)):
+    # f is Z [w; T u + τ_p] (Z = [G; Jᵀ]⁺) plus internal forces, so its rounding is
+    # relative to |Z| times the terms it is formed from, which a force cancelled to
+    # nearly zero does not show (a joint's actuator against its passive torque
+    # through a short arm: forces of 1e-12 N formed from terms of 1 N).
+    joint_terms = np.abs(T) @ np.abs(tau) + np.abs(passive)
+    formed = np.abs(np.linalg.pinv(np.vstack([G, JT]))) @ np.concatenate([np.abs(w), joint_terms])
+    fmax = max(np.abs(f).max(), formed.max())
+    for name, A, target, target_terms in (("G f − w", G, w, np.abs(w)), ("Jᵀ f − τ", JT, joint, joint_terms)):
         r = np.abs(A @ f - target)
-        terms = np.abs(A).sum(axis=1) * fmax + np.abs(target)
+        terms = np.abs(A).sum(axis=1) * fmax + target_terms
         # Normwise over a block (the joints; G's force rows, its moment rows): a row
         # within the rank tolerance of its block's largest is rounding to the model,
         # which sets it to 0.
@@ -247,7 +254,7 @@ def wrong(p, d):
     for c in p["contacts"]:
         d_ = DIM[c["model"]]
         metric += [1.0] * min(d_, 3) + ([1 / c["mu_torsion"]] if d_ == 4 else [])
-    fscale = np.abs(f * np.array(metric)).max()
+    fscale = max(np.abs(f * np.array(metric)).max(), (formed * np.array(metric)).max())
     for i, c in enumerate(p["contacts"]):
         x = f[k:k + DIM[c["model"]]]
         k += len(x)

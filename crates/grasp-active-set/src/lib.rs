@@ -210,8 +210,8 @@ pub struct ForceSpaceSolver {
 struct Engine {
     /// Identity of each inequality row.
     rows: Vec<RowId>,
-    /// The constant right-hand side of each row, for the fixed-row tolerance.
-    c0: Vec<f64>,
+    /// The size of the terms behind each row's constant, for the fixed-row tolerance.
+    c0_terms: Vec<f64>,
     /// Variables.
     m: usize,
     settings: ActiveSetSettings,
@@ -692,7 +692,7 @@ impl Engine {
         Ok(Self {
             scale_rows,
             rows: qp.rows.to_vec(),
-            c0: qp.c0.to_vec(),
+            c0_terms: qp.c0_terms.to_vec(),
             m,
             settings,
             dinv,
@@ -775,7 +775,9 @@ impl Engine {
             // the wrench below its cone, judged infeasible in one system of units only,
             // where the floor was ‖w‖∞ times the largest row's terms.
             let size = |m: &[f64]| m.iter().zip(w).map(|(a, b)| (a * b).abs()).sum::<f64>();
-            let scale = self.c0[row].abs() + size(self.fixed_m.row(r)) + size(&self.wrench_terms);
+            // The constant's own terms, not its value: the passive torques' force on a
+            // contact they leave unloaded cancels to rounding of terms of 1 N.
+            let scale = self.c0_terms[row] + size(self.fixed_m.row(r)) + size(&self.wrench_terms);
             if c > self.settings.feasibility_tolerance * scale && !self.fixed_moved[r] {
                 out.status = Status::Infeasible;
                 out.reason = Some(Reason::FixedRowViolated {

@@ -120,7 +120,17 @@ pub struct ConicForm {
     a_cols: Vec<f64>,
     abs_cols: Vec<f64>,
     bw_cols: Vec<f64>,
+    /// The size of the terms behind each entry of `b0` (the passive torques' force, the
+    /// minimum normal forces, the limits), and the largest of them and of each row's
+    /// `Σ_j |bw_ij|`: `b(w)` is rounding where it is within [`B_ROUNDING`] of them.
+    b0_terms: Vec<f64>,
+    b0_terms_max: f64,
+    bw_abs_max: f64,
 }
+
+/// Where `b(w)` is within this of its terms ([`ConicForm::b_into`]), it is their
+/// rounding, as the core's check judges forces (`1e3 ε` per term, and up to 40 ε seen).
+const B_ROUNDING: f64 = 1e3 * f64::EPSILON;
 
 impl ConicForm {
     /// Assembles the conic problem of `qp` (exact blocks become second-order cones).
@@ -211,6 +221,7 @@ impl ConicForm {
         let n = model.equality_rows() + qp.inequality_rows() + socs;
         let mut data: Vec<f64> = Vec::with_capacity(n * nx);
         let mut b0: Vec<f64> = Vec::with_capacity(n);
+        let mut b0_terms: Vec<f64> = Vec::with_capacity(n);
         let mut bws: Vec<[f64; 6]> = Vec::with_capacity(n);
         // A new zero row of A, to be filled.
         let new_row = |data: &mut Vec<f64>| -> usize {
@@ -221,14 +232,22 @@ impl ConicForm {
         // A row "v·f + k ≥ 0" (v on force components, already in force units).
         let force_row = |data: &mut Vec<f64>,
                          b0: &mut Vec<f64>,
+                         b0_terms: &mut Vec<f64>,
                          bws: &mut Vec<[f64; 6]>,
                          v: &[(usize, f64)]| {
             let start = new_row(data);
             let a = &mut data[start..];
-            let (mut bw, mut b) = ([0.0; 6], 0.0);
+            let (mut bw, mut b, mut size) = ([0.0; 6], 0.0, 0.0);
             for &(i, c) in v {
                 // The passive torques' force at v = 0 (Passive::solver_force).
                 b += c * model.passive.solver_force.get(i).copied().unwrap_or(0.0);
+                size += c.abs()
+                    * model
+                        .passive
+                        .solver_force_terms
+                        .get(i)
+                        .copied()
+                        .unwrap_or(0.0);
                 for ((aj, z), s) in a.iter_mut().zip(model.z2.row(i)).zip(&col_scale) {
                     *aj -= c * z / s;
                 }
@@ -244,6 +263,7 @@ impl ConicForm {
                 }
             }
             b0.push(b);
+            b0_terms.push(size);
             bws.push(bw);
         };
         let mut cones = Vec::new();
@@ -263,6 +283,7 @@ impl ConicForm {
                 *v = -model.eq_w[(i, j)] / nrm;
             }
             b0.push(0.0);
+            b0_terms.push(0.0);
             bws.push(bw);
         }
         if model.equality_rows() > 0 {
@@ -290,6 +311,7 @@ impl ConicForm {
                 *v = rho * qp.hw[(i, j)];
             }
             b0.push(-rho * qp.c0[i]);
+            b0_terms.push(rho * qp.c0_terms[i]);
             bws.push(bw);
             row_scale.push(rho);
         }
@@ -315,7 +337,7 @@ impl ConicForm {
             let (x, y, z, t) = (o, o + 1, o + 2, o + 3);
             let mut cone = |rows: &[&[(usize, f64)]]| {
                 for v in rows {
-                    force_row(&mut data, &mut b0, &mut bws, v);
+                    force_row(&mut data, &mut b0, &mut b0_terms, &mut bws, v);
                 }
                 soc_contacts.push(ci);
                 cones.push(ConeKind::SecondOrder(rows.len()));
@@ -434,10 +456,18 @@ impl ConicForm {
         for i in 0..n {
             a_padded.row_mut(i)[..nx].copy_from_slice(a.row(i));
         }
+        let b0_terms_max = b0_terms.iter().fold(0.0f64, |a, &v| a.max(v));
+        let bw_abs_max = bws
+            .iter()
+            .map(|r| r.iter().map(|v| v.abs()).sum::<f64>())
+            .fold(0.0f64, f64::max);
         Self {
             a_cols,
             abs_cols,
             bw_cols,
+            b0_terms,
+            b0_terms_max,
+            bw_abs_max,
             nx,
             joints: m,
             free: d,
@@ -478,21 +508,44 @@ impl ConicForm {
     pub fn b_into(&self, w: &[f64; 6], out: &mut [f64]) -> f64 {
         out.copy_from_slice(&self.b0);
         add_columns(out, &self.bw_cols, w, 1.0);
-        let (head, tail) = (&out[..self.limit_rows.start], &out[self.limit_rows.end..]);
-        // A limit that x = 0 breaks (b < 0: a range that excludes 0, or passive torques
-        // beyond a limit) says how large the answer is; one that it meets does not.
-        let alpha = out[self.limit_rows.clone()]
-            .iter()
-            .filter(|&&v| v < 0.0)
-            .fold(
-                head.iter().chain(tail).fold(0.0f64, |a, v| a.max(v.abs())),
-                |a, &v| a.max(-v),
-            );
+        let mut alpha = self.b_scale(out);
+        // A b within the rounding of its terms is zero, entry by entry: where the
+        // passive torques alone leave every contact unloaded (no wrench, G of full
+        // column rank), b is their force cancelled to 40 ε of terms of 1 N, and α
+        // scaled that rounding up to a grasp that every method called infeasible.
+        let wmax = w.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        if alpha > 0.0 && alpha <= B_ROUNDING * (self.b0_terms_max + self.bw_abs_max * wmax) {
+            let rows = out.len();
+            for (i, (v, t)) in out.iter_mut().zip(&self.b0_terms).enumerate() {
+                let terms = t
+                    + (0..6)
+                        .map(|j| (self.bw_cols[j * rows + i] * w[j]).abs())
+                        .sum::<f64>();
+                if v.abs() <= B_ROUNDING * terms {
+                    *v = 0.0;
+                }
+            }
+            alpha = self.b_scale(out);
+        }
         if alpha > 0.0 {
             let inv = 1.0 / alpha;
             out.iter_mut().for_each(|v| *v *= inv);
         }
         alpha
+    }
+
+    /// α of [`Self::b_into`]: the largest |b_i|, a limit's only where x = 0 breaks it
+    /// (b < 0: a range that excludes 0, or passive torques beyond a limit), for that
+    /// says how large the answer is, and one that x = 0 meets does not.
+    fn b_scale(&self, b: &[f64]) -> f64 {
+        let (head, tail) = (&b[..self.limit_rows.start], &b[self.limit_rows.end..]);
+        b[self.limit_rows.clone()]
+            .iter()
+            .filter(|&&v| v < 0.0)
+            .fold(
+                head.iter().chain(tail).fold(0.0f64, |a, v| a.max(v.abs())),
+                |a, &v| a.max(-v),
+            )
     }
 
     /// Adds `A_inᵀ z_in` to `grad` and its terms' sizes to `gsize` (rows `eq..` with a

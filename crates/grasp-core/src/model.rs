@@ -213,10 +213,17 @@ pub struct Passive {
     pub row_targets: Vec<f64>,
     /// `f_p`: the contact forces at `w = 0`, `u = 0`.
     pub force: Vec<f64>,
+    /// The size of the terms behind each component of `f_p`, which bounds its rounding.
+    pub force_terms: Vec<f64>,
     /// `u_p`, per torque variable.
     pub torque_offset: Vec<f64>,
     /// `f_p + Z2 u_p`: the contact forces at `w = 0`, `v = 0`.
     pub solver_force: Vec<f64>,
+    /// The size of the terms behind each component of `solver_force`: its value is
+    /// known to within their rounding, amplified by the conditioning of Z and of the
+    /// consistency rows (up to 40 ε seen on a contact that no torque loads, whose
+    /// components cancel to zero).
+    pub solver_force_terms: Vec<f64>,
     /// `e_p`: `C u − e(w) = e_p`, per equality row.
     pub eq_offset: Vec<f64>,
     /// Added to `unreachable · w` (equilibrated units): a passive torque that no
@@ -643,20 +650,21 @@ impl GraspModel {
         let passive_basis = Matrix::from_fn(n, n - rank, |i, k| dinv[i] * dec.null_basis[(i, k)]);
         // Passive torques: the targets [Q₂ᵀ τ_p; T⁺ τ_p] of E's and Jᵀ's rows, and the
         // force f_p = Z [0; those] they call for.
-        let passive_force: Vec<f64> = if row_targets.is_empty() {
-            Vec::new()
+        // (With the size of each one's terms, which bounds its rounding.)
+        let (passive_force, passive_terms): (Vec<f64>, Vec<f64>) = if row_targets.is_empty() {
+            (Vec::new(), Vec::new())
         } else {
             (0..n)
                 .map(|i| {
-                    let z = &zm.row(i)[6..];
-                    dinv[i]
-                        * z.iter()
-                            .zip(&r[6..])
-                            .zip(&row_targets)
-                            .map(|((z, ri), t)| z * ri * t)
-                            .sum::<f64>()
+                    let terms = zm.row(i)[6..]
+                        .iter()
+                        .zip(&r[6..])
+                        .zip(&row_targets)
+                        .map(|((z, ri), t)| z * ri * t);
+                    let (sum, size) = terms.fold((0.0, 0.0), |(s, a), t| (s + t, a + t.abs()));
+                    (dinv[i] * sum, dinv[i] * size)
                 })
-                .collect()
+                .unzip()
         };
         let mut wrench_scale = [1.0; 6];
         wrench_scale.copy_from_slice(&r[..6]);
@@ -770,15 +778,29 @@ impl GraspModel {
                         *t = dinv_w[j] * dot(pinv.row(j), &ep);
                     }
                 }
-                let solver_force = (0..n)
-                    .map(|i| passive_force[i] + dot(z2.row(i), &torque_offset))
-                    .collect();
+                // (With the size of each one's terms: see `solver_force_terms`.)
+                let (solver_force, solver_force_terms) = (0..n)
+                    .map(|i| {
+                        let z = z2.row(i);
+                        let size: f64 = z
+                            .iter()
+                            .zip(&torque_offset)
+                            .map(|(z, u)| (z * u).abs())
+                            .sum();
+                        (
+                            passive_force[i] + dot(z, &torque_offset),
+                            passive_terms[i] + size,
+                        )
+                    })
+                    .unzip();
                 Passive {
                     joint_torque: tp.clone(),
                     row_targets,
                     force: passive_force,
+                    force_terms: passive_terms,
                     torque_offset,
                     solver_force,
+                    solver_force_terms,
                     eq_offset,
                     unreachable_offset,
                 }
@@ -933,20 +955,25 @@ impl GraspModel {
     /// `Σ_j |a_j| · (|Z1| |w| + |Z2| |τ| + |N| |ξ|)_j`: the size of the terms behind
     /// `a · f`, which bounds the rounding of `f = Z1 w + Z2 τ + N ξ` seen through `a`.
     pub fn force_terms_dot(&self, a: &[f64], w: &[f64; 6], tau: &[f64], xi: &[f64]) -> f64 {
-        let abs_dot =
-            |x: &[f64], y: &[f64]| -> f64 { x.iter().zip(y).map(|(p, q)| (p * q).abs()).sum() };
         (0..self.force_dim())
             .filter(|&j| a[j] != 0.0)
-            .map(|j| {
-                let mut t = abs_dot(self.z1.row(j), w)
-                    + abs_dot(self.z2.row(j), tau)
-                    + self.passive.force.get(j).map_or(0.0, |v| v.abs());
-                if !xi.is_empty() {
-                    t += abs_dot(self.passive_basis.row(j), xi);
-                }
-                a[j].abs() * t
-            })
+            .map(|j| a[j].abs() * self.force_terms(j, w, tau, xi))
             .sum()
+    }
+
+    /// `(|Z1| |w| + |Z2| |τ| + |N| |ξ|)_j` with the terms of the passive force's `f_p,j`:
+    /// the size of the terms behind the force component `f_j`, which bounds its rounding
+    /// (a force that cancels to nearly zero keeps the rounding of its terms).
+    pub fn force_terms(&self, j: usize, w: &[f64; 6], tau: &[f64], xi: &[f64]) -> f64 {
+        let abs_dot =
+            |x: &[f64], y: &[f64]| -> f64 { x.iter().zip(y).map(|(p, q)| (p * q).abs()).sum() };
+        let mut t = abs_dot(self.z1.row(j), w)
+            + abs_dot(self.z2.row(j), tau)
+            + self.passive.force_terms.get(j).copied().unwrap_or(0.0);
+        if !xi.is_empty() {
+            t += abs_dot(self.passive_basis.row(j), xi);
+        }
+        t
     }
 
     /// The wrench in equilibrated units: `w_i · wrench_scale_i`.

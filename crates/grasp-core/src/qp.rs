@@ -148,6 +148,8 @@ pub struct LeastDistance<'a> {
     pub h: InequalityRows<'a>,
     /// Constant part of the right-hand side.
     pub c0: &'a [f64],
+    /// The size of the terms behind each entry of `c0`, which bounds its rounding.
+    pub c0_terms: &'a [f64],
     /// Wrench part of the right-hand side, R × 6.
     pub hw: &'a Matrix,
     /// Equality rows, p × k, independent.
@@ -368,6 +370,11 @@ pub struct TorqueQp {
     pub hp: Matrix,
     /// `c(w) = c0 − hw · w`: the constant part (minimum normal forces, limits).
     pub c0: Vec<f64>,
+    /// The size of the terms behind each entry of `c0` (the minimum normal force or the
+    /// limit, and the passive torques' force or torque offset), which bounds its
+    /// rounding: on a contact the passive torques alone leave unloaded, `c0` is their
+    /// force cancelled to nearly zero.
+    pub c0_terms: Vec<f64>,
     /// `c(w) = c0 − hw · w`: S Z1, zero on limit rows, R × 6.
     pub hw: Matrix,
     /// What each row stands for.
@@ -475,15 +482,21 @@ fn combine(out: &mut [f64], face: &[f64], z: &[f64]) {
 /// The constant side of row k of contact ci's r rows with face `face`: the minimum
 /// normal force on the last (the normal's), less the face's share of the passive
 /// torques' force at `v = 0` ([`crate::model::Passive::solver_force`]).
-fn contact_c0(model: &GraspModel, ci: usize, k: usize, r: usize, face: &[f64]) -> f64 {
+/// With the size of its terms.
+fn contact_c0(model: &GraspModel, ci: usize, k: usize, r: usize, face: &[f64]) -> (f64, f64) {
     let fmin = if k + 1 == r {
         model.min_normal_force[ci]
     } else {
         0.0
     };
+    let off = model.offsets[ci];
     match model.passive.solver_force.as_slice() {
-        [] => fmin,
-        fp => fmin - dot(face, &fp[model.offsets[ci]..]),
+        [] => (fmin, fmin.abs()),
+        fp => {
+            let terms = &model.passive.solver_force_terms[off..];
+            let size: f64 = face.iter().zip(terms).map(|(s, t)| s.abs() * t).sum();
+            (fmin - dot(face, &fp[off..]), fmin.abs() + size)
+        }
     }
 }
 
@@ -527,7 +540,7 @@ impl TorqueQp {
         // Rows are written in place: Hp = S N, Hw = S Z1 (S block-diagonal); H = S Z2
         // waits for its first reader.
         let (mut hp, mut hw) = (Matrix::zeros(total, d), Matrix::zeros(total, 6));
-        let mut c0 = Vec::with_capacity(total);
+        let (mut c0, mut c0_terms) = (Vec::with_capacity(total), Vec::with_capacity(total));
         let mut rows = Vec::with_capacity(total);
         let mut contacts = Vec::with_capacity(model.contacts.len());
         for (ci, repr) in constraints.cones.iter().enumerate() {
@@ -551,7 +564,9 @@ impl TorqueQp {
                     let np = &model.passive_basis.as_slice()[off * d..(off + dim) * d];
                     combine(hp.row_mut(i), &face[..dim], np);
                 }
-                c0.push(contact_c0(&model, ci, k, r, &face[..dim]));
+                let (v, size) = contact_c0(&model, ci, k, r, &face[..dim]);
+                c0.push(v);
+                c0_terms.push(size);
                 rows.push(RowId::of_contact(ci, k, r));
             }
         }
@@ -561,6 +576,7 @@ impl TorqueQp {
             let up = model.passive.torque_offset.get(j).copied().unwrap_or(0.0);
             if let Some(lo) = lim.lower() {
                 c0.push(lo - up);
+                c0_terms.push(lo.abs() + up.abs());
                 rows.push(RowId::TorqueLimit {
                     joint: j,
                     upper: false,
@@ -568,6 +584,7 @@ impl TorqueQp {
             }
             if let Some(hi) = lim.upper() {
                 c0.push(-hi + up);
+                c0_terms.push(hi.abs() + up.abs());
                 rows.push(RowId::TorqueLimit {
                     joint: j,
                     upper: true,
@@ -585,6 +602,7 @@ impl TorqueQp {
             hp,
             hw,
             c0,
+            c0_terms,
             rows,
             contacts,
             constraints,
@@ -661,8 +679,11 @@ impl TorqueQp {
         }
         self.hp = splice(&self.hp, &hp);
         self.hw = splice(&self.hw, &hw);
-        let c0 = (0..new_rows).map(|k| contact_c0(&self.model, ci, k, new_rows, faces.row(k)));
+        let (c0, terms): (Vec<f64>, Vec<f64>) = (0..new_rows)
+            .map(|k| contact_c0(&self.model, ci, k, new_rows, faces.row(k)))
+            .unzip();
         self.c0.splice(start..end, c0);
+        self.c0_terms.splice(start..end, terms);
         let ids = (0..new_rows).map(|k| RowId::of_contact(ci, k, new_rows));
         self.rows.splice(start..end, ids);
         let shift = new_rows as isize - old.rows as isize;
@@ -709,6 +730,7 @@ impl TorqueQp {
                 cones: &self.constraints.cones,
             }),
             c0: &self.c0,
+            c0_terms: &self.c0_terms,
             hw: &self.hw,
             eq: &self.model.eq,
             eq_w: &self.model.eq_w,
@@ -734,6 +756,8 @@ pub struct ForceSpaceQp {
     pub h: Matrix,
     /// Their right-hand sides (no wrench part).
     pub c0: Vec<f64>,
+    /// `|c0|`: constants of no cancelled terms.
+    c0_terms: Vec<f64>,
     hw: Matrix,
     /// `G f = w` with independent rows: `eq f = −eq_w w`.
     pub eq: Matrix,
@@ -807,6 +831,7 @@ impl ForceSpaceQp {
         Ok(Self {
             hw: Matrix::zeros(h.nrows(), 6),
             h,
+            c0_terms: c0.iter().map(|v| v.abs()).collect(),
             c0,
             eq,
             eq_w,
@@ -822,6 +847,7 @@ impl ForceSpaceQp {
         LeastDistance {
             h: InequalityRows::Formed(&self.h),
             c0: &self.c0,
+            c0_terms: &self.c0_terms,
             hw: &self.hw,
             eq: &self.eq,
             eq_w: &self.eq_w,

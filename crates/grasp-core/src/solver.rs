@@ -246,7 +246,8 @@ struct RowViolations {
 /// One contact's rows `c0_k − s_k · f_c ≤ 0` (faces of `D` components, row-major):
 /// adds them to `viol` and returns whether a row fails at `tol`. At these lengths a
 /// general dot product costs several times the arithmetic, hence `D` fixed. A row over
-/// the cheap bound `tol (|c0| + F)` pays for its own terms `Σ |s f|`.
+/// the cheap bound `tol (|c0| + F)` pays for its own terms `Σ |s f|`, and one over that
+/// for the rounding of f itself, `floor(s)`.
 #[inline(always)]
 fn cone_rows<const D: usize>(
     faces: &[f64],
@@ -254,6 +255,7 @@ fn cone_rows<const D: usize>(
     fmin: f64,
     tol: f64,
     fscale: f64,
+    floor: &mut impl FnMut(&[f64]) -> f64,
     viol: &mut RowViolations,
 ) -> bool {
     let fc: &[f64; D] = fc
@@ -275,7 +277,10 @@ fn cone_rows<const D: usize>(
         let v = -dot(s);
         viol.worst = viol.worst.max(v);
         if exceeds(v, cheap) {
-            let bound = cheap + tol * terms(s);
+            let mut bound = cheap + tol * terms(s);
+            if exceeds(v, bound) {
+                bound += floor(s);
+            }
             bad |= exceeds(v, bound);
             viol.ratio.add(v, bound);
         } else {
@@ -287,7 +292,10 @@ fn cone_rows<const D: usize>(
         viol.worst = viol.worst.max(v);
         let cheap = tol * (fmin.abs() + fscale);
         if exceeds(v, cheap) {
-            let bound = cheap + tol * terms(last);
+            let mut bound = cheap + tol * terms(last);
+            if exceeds(v, bound) {
+                bound += floor(last);
+            }
             bad |= exceeds(v, bound);
             viol.ratio.add(v, bound);
         } else if v > 0.0 {
@@ -915,6 +923,16 @@ impl TorqueQp {
         }
         // c − H τ = fmin − S f on contact rows (S is block-diagonal: a few flops per
         // row), and the limit rows read τ directly.
+        // The size of the terms behind each of a contact's force components, which
+        // bounds their rounding: a force that cancels to nearly zero (the passive
+        // torques' against the actuators') keeps that of its terms.
+        let contact_terms = |offset: usize, dim: usize| -> [f64; 4] {
+            let mut t = [0.0; 4];
+            for (k, v) in t[..dim].iter_mut().enumerate() {
+                *v = model.force_terms(offset + k, w, tau, &out.internal_forces);
+            }
+            t
+        };
         let mut viol = RowViolations {
             worst: 0.0,
             ratio: WorstRatio::NONE,
@@ -939,10 +957,16 @@ impl TorqueQp {
                     &unit[..dim]
                 }
             };
+            // The rounding of `s · f`, through each component's terms (formed once).
+            let mut terms = None;
+            let mut floor = |s: &[f64]| -> f64 {
+                let t = terms.get_or_insert_with(|| contact_terms(c.offset, dim));
+                rounding * s.iter().zip(&*t).map(|(s, t)| s.abs() * t).sum::<f64>()
+            };
             let bad = match dim {
-                1 => cone_rows::<1>(faces, fc, fmin, tol, fscale, &mut viol),
-                3 => cone_rows::<3>(faces, fc, fmin, tol, fscale, &mut viol),
-                _ => cone_rows::<4>(faces, fc, fmin, tol, fscale, &mut viol),
+                1 => cone_rows::<1>(faces, fc, fmin, tol, fscale, &mut floor, &mut viol),
+                3 => cone_rows::<3>(faces, fc, fmin, tol, fscale, &mut floor, &mut viol),
+                _ => cone_rows::<4>(faces, fc, fmin, tol, fscale, &mut floor, &mut viol),
             };
             vbad |= bad;
         }
@@ -966,7 +990,14 @@ impl TorqueQp {
             let g = m.unwrap_or(0.0);
             if let ConeRepr::Exact = repr {
                 cone = cone.max(g - fz);
-                let bound = tol * fscale.max(f64::MIN_POSITIVE) * 10.0;
+                let mut bound = tol * fscale.max(f64::MIN_POSITIVE) * 10.0;
+                if exceeds(g - fz, bound) {
+                    // The rounding of f: the gauge is a seminorm on the components
+                    // (|g(f + e) − g(f)| ≤ g(e)), so g − fz moves by at most g of the
+                    // components' terms plus fz's.
+                    let t = contact_terms(c.offset, c.model.dim());
+                    bound += rounding * (c.model.gauge(&t) + t[c.model.normal_index()]);
+                }
                 vbad |= exceeds(g - fz, bound);
                 if g > fz {
                     cratio.add(g - fz, bound);

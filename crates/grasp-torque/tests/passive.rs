@@ -595,3 +595,121 @@ fn passive_torques_are_the_same_in_any_units() {
     eprintln!("{checked} rescaled optima agree");
     assert!(checked >= 100, "{checked}");
 }
+
+/// With no wrench, the passive torques alone load the hand: where the weights make
+/// unloaded contacts optimal, `f = Z2 τ + f_p` cancels to rounding of its terms (forces
+/// of 1e-16 N formed from terms of 1 N), and the core's check judged that rounding
+/// against the forces themselves (`fixtures/fuzz/unloaded-by-passive-torques.json`,
+/// `fuzz_answers.py` seed 166211: the weighed Allegro hand with torque weights over three
+/// decades, refused as `numerical_failure` at every N). Where G has full column rank,
+/// no wrench leaves every contact unloaded and every row's constant is the rounding of
+/// the passive torques' force, which the native solvers and Clarabel judged against
+/// itself: of these random grasps (wrench zeroed), 32 answers at N = 8 and exact were
+/// `infeasible` and 44 `numerical_failure`. Every answer, linear at N = 4, 8 and 16 and
+/// exact, is the direct SOCP's, in any units, and the fixture's is `u = −τ_p` with
+/// σ = Σ w τ_p², which every polyhedron's optimum shares.
+#[test]
+fn passive_torques_alone_are_answered_with_unloaded_contacts() {
+    let (mut compared, mut unloaded) = (0, 0);
+    let fixture = grasp_torque::load_problem(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/fuzz/unloaded-by-passive-torques.json"
+    ))
+    .unwrap();
+    let mut problems = vec![("fixture".to_string(), fixture)];
+    for seed in 0..300u64 {
+        let Some(mut p) = grasp(seed) else { continue };
+        p.wrench = [0.0; 6];
+        // The passive torques at most 1 (the problem is homogeneous in them), so that
+        // the direct SOCP's absolute tolerances are relative to their scale.
+        if let Some(tp) = &mut p.passive_torque {
+            let top = norm_inf(tp);
+            tp.iter_mut().for_each(|v| *v /= top);
+        }
+        if p.transmission.is_none() {
+            let mut rng = Rng(seed ^ 0x3e16);
+            let m = p.joints();
+            p.torque_weights = Some((0..m).map(|_| 10f64.powf(rng.uniform(-2.0, 2.0))).collect());
+        }
+        problems.push((format!("seed {seed}"), p));
+    }
+    for (name, p) in &problems {
+        let Direct::Optimal(sigma, _) = direct(p) else {
+            continue;
+        };
+        let held = |s: &grasp_torque::Solution, at: &str| {
+            assert_eq!(s.status, Status::Optimal, "{name} {at}: {:?}", s.reason);
+            s.objective
+        };
+        let exact = held(&run(p, Backend::ActiveSet, Cones::Exact), "exact");
+        // (Clarabel's tolerances on the direct SOCP: 1e-10 absolute and relative.)
+        let close = |a: f64| (a - sigma).abs() <= 1e-7 * sigma + 1e-9;
+        assert!(
+            close(exact),
+            "{name}: exact σ {exact} against the direct SOCP's {sigma}"
+        );
+        let fmax = norm_inf(&run(p, Backend::ActiveSet, Cones::Exact).contact_forces);
+        let loaded = fmax > 1e-9 * norm_inf(p.passive_torque.as_deref().unwrap_or(&[]));
+        unloaded += usize::from(!loaded);
+        for sides in [4, 8, 16] {
+            let mut q = p.clone();
+            q.linearization.sides = sides;
+            let s = run(&q, Backend::ActiveSet, Cones::Linear);
+            // (An inscribed polyhedron may not hold a loaded grasp.)
+            if loaded && s.status == Status::Infeasible {
+                continue;
+            }
+            let s = held(&s, &format!("N = {sides}"));
+            assert!(
+                s >= exact * (1.0 - 1e-9),
+                "{name} N = {sides}: σ {s} below σ* {exact}"
+            );
+            if !loaded {
+                assert!(
+                    rel(s, exact) <= 1e-9,
+                    "{name} N = {sides}: σ {s} against {exact}"
+                );
+            }
+        }
+        for (l, f) in [(1e-3, 1.0), (37.0, 1e-2), (1.0, 1e3)] {
+            let q = rescale(p, l, f);
+            for cones in [Cones::Linear, Cones::Exact] {
+                let s = run(&q, Backend::ActiveSet, cones);
+                if loaded && cones == Cones::Linear && s.status == Status::Infeasible {
+                    continue;
+                }
+                let s = held(&s, &format!("{cones}, × ({l}, {f})"));
+                let back = s / (l * f).powi(2);
+                assert!(
+                    close(back) || cones == Cones::Linear && back >= sigma,
+                    "{name} {cones} × ({l}, {f}): σ {back} against {sigma}"
+                );
+            }
+        }
+        compared += 1;
+    }
+    let p = &problems[0].1;
+    let s = run(p, Backend::ActiveSet, Cones::Linear);
+    let tp = p.passive_torque.as_deref().unwrap();
+    let w = p.torque_weights.as_deref().unwrap();
+    let closed: f64 = tp.iter().zip(w).map(|(t, w)| w * t * t).sum();
+    assert!(
+        rel(s.objective, closed) <= 1e-12,
+        "σ {} against Σ w τ_p² = {closed}",
+        s.objective
+    );
+    for (u, t) in s.torque.iter().zip(tp) {
+        assert!(
+            (u + t).abs() <= 1e-12 * norm_inf(tp),
+            "u {u} against −τ_p {}",
+            -t
+        );
+    }
+    eprintln!(
+        "{compared} zero-wrench grasps against the direct SOCP, {unloaded} with unloaded contacts"
+    );
+    assert!(
+        compared >= 100 && unloaded >= 1,
+        "{compared} compared, {unloaded} unloaded"
+    );
+}
