@@ -210,8 +210,6 @@ pub struct ForceSpaceSolver {
 struct Engine {
     /// Identity of each inequality row.
     rows: Vec<RowId>,
-    /// The size of the terms behind each row's constant, for the fixed-row tolerance.
-    c0_terms: Vec<f64>,
     /// Variables.
     m: usize,
     settings: ActiveSetSettings,
@@ -246,6 +244,8 @@ struct Engine {
     /// Rows of H that no torque affects: `c0 − m · w ≤ 0` must hold as it is.
     fixed: Vec<usize>,
     fixed_c0: Vec<f64>,
+    /// The size of the terms behind each fixed row's constant, for its tolerance.
+    fixed_c0_terms: Vec<f64>,
     fixed_m: Matrix,
     /// Per fixed row, whether its part in y is above the rounding of its own norm: set
     /// aside beside a far larger row (below the model's resolution of its own norm and
@@ -666,6 +666,7 @@ impl Engine {
         }
         write_columns(&a, &mut a_cols, nr);
         let fixed_c0 = fixed.iter().map(|&i| qp.c0[i]).collect();
+        let fixed_c0_terms = fixed.iter().map(|&i| qp.c0_terms[i]).collect();
         let mut fixed_m = Matrix::zeros(fixed.len(), 6);
         for (r, &i) in fixed.iter().enumerate() {
             fixed_m.row_mut(r).copy_from_slice(&mfull(i));
@@ -692,7 +693,6 @@ impl Engine {
         Ok(Self {
             scale_rows,
             rows: qp.rows.to_vec(),
-            c0_terms: qp.c0_terms.to_vec(),
             m,
             settings,
             dinv,
@@ -708,6 +708,7 @@ impl Engine {
             mn_cols,
             fixed,
             fixed_c0,
+            fixed_c0_terms,
             fixed_m,
             fixed_moved,
             wrench_terms,
@@ -777,7 +778,8 @@ impl Engine {
             let size = |m: &[f64]| m.iter().zip(w).map(|(a, b)| (a * b).abs()).sum::<f64>();
             // The constant's own terms, not its value: the passive torques' force on a
             // contact they leave unloaded cancels to rounding of terms of 1 N.
-            let scale = self.c0_terms[row] + size(self.fixed_m.row(r)) + size(&self.wrench_terms);
+            let scale =
+                self.fixed_c0_terms[r] + size(self.fixed_m.row(r)) + size(&self.wrench_terms);
             if c > self.settings.feasibility_tolerance * scale && !self.fixed_moved[r] {
                 out.status = Status::Infeasible;
                 out.reason = Some(Reason::FixedRowViolated {
