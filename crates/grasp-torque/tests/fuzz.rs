@@ -137,7 +137,8 @@ fn check_answer(p: &GraspProblem, backend: Backend, cones: Cones, wrench: &[f64;
             .contact_forces
             .iter()
             .zip(&unit)
-            .fold(0.0f64, |a, (v, u)| a.max((v / u).abs()));
+            .fold(0.0f64, |a, (v, u)| a.max((v / u).abs()))
+            .max(formed(p, s, wrench, &unit));
         for i in 0..6 {
             let through: f64 = (0..g.ncols())
                 .map(|j| (g[(i, j)] * unit[j]).abs())
@@ -153,6 +154,57 @@ fn check_answer(p: &GraspProblem, backend: Backend, cones: Cones, wrench: &[f64;
                 "{backend}/{cones}: row {i} residual {r} of {scale}"
             );
         }
+    }
+}
+
+/// With passive torques, the largest size of the terms a force component is formed
+/// from, `|Z| [|w|; |T| |u| + |τ_p|]` with `Z = [G; Jᵀ]⁺` by nalgebra's SVD, in force
+/// units: forces cancelled to nearly zero keep the rounding of those terms (contacts
+/// the passive torques alone leave unloaded, 1e-16 N formed from terms of 1 N). Zero
+/// without passive torques, or where the SVD gives nothing finite.
+fn formed(p: &GraspProblem, s: &Solution, wrench: &[f64; 6], unit: &[f64]) -> f64 {
+    let Some(tp) = p.passive_torque.as_deref() else {
+        return 0.0;
+    };
+    let (g, jt) = (&p.grasp_matrix, &p.jacobian_transpose);
+    let (n, m) = (g.ncols(), jt.nrows());
+    let a = nalgebra::DMatrix::from_fn(
+        6 + m,
+        n,
+        |i, j| {
+            if i < 6 {
+                g[(i, j)]
+            } else {
+                jt[(i - 6, j)]
+            }
+        },
+    );
+    let eps = 1e-15 * a.amax();
+    let Ok(z) = a.pseudo_inverse(eps) else {
+        return 0.0;
+    };
+    let joint: Vec<f64> = (0..m)
+        .map(|i| {
+            let tu: f64 = match &p.transmission {
+                Some(t) => (0..t.matrix.ncols())
+                    .map(|k| (t.matrix[(i, k)] * s.torque.get(k).copied().unwrap_or(0.0)).abs())
+                    .sum(),
+                None => s.torque.get(i).copied().unwrap_or(0.0).abs(),
+            };
+            tu + tp.get(i).copied().unwrap_or(0.0).abs()
+        })
+        .collect();
+    let terms = |j: usize| -> f64 {
+        (0..6 + m)
+            .map(|i| z[(j, i)].abs() * if i < 6 { wrench[i].abs() } else { joint[i - 6] })
+            .sum::<f64>()
+            / unit[j]
+    };
+    let top = (0..n).map(terms).fold(0.0f64, f64::max);
+    if top.is_finite() {
+        top
+    } else {
+        0.0
     }
 }
 
