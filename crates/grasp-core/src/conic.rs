@@ -121,8 +121,9 @@ pub struct ConicForm {
     abs_cols: Vec<f64>,
     bw_cols: Vec<f64>,
     /// The size of the terms behind each entry of `b0` (the passive torques' force, the
-    /// minimum normal forces, the limits), and the largest of them and of each row's
-    /// `Σ_j |bw_ij|`: `b(w)` is rounding where it is within [`B_ROUNDING`] of them.
+    /// minimum normal forces, the limits), the largest of them on the rows that set α,
+    /// and the largest `Σ_j |bw_ij|`: `b(w)` is rounding where it is within
+    /// [`B_ROUNDING`] of them.
     b0_terms: Vec<f64>,
     b0_terms_max: f64,
     bw_abs_max: f64,
@@ -456,7 +457,13 @@ impl ConicForm {
         for i in 0..n {
             a_padded.row_mut(i)[..nx].copy_from_slice(a.row(i));
         }
-        let b0_terms_max = b0_terms.iter().fold(0.0f64, |a, &v| a.max(v));
+        // (Over the rows that set α: a loose limit's terms would open the gate below on
+        // every solve.)
+        let b0_terms_max = b0_terms
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !limit_rows.contains(i))
+            .fold(0.0f64, |a, (_, &v)| a.max(v));
         let bw_abs_max = bws
             .iter()
             .map(|r| r.iter().map(|v| v.abs()).sum::<f64>())

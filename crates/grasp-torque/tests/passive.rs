@@ -604,8 +604,9 @@ fn passive_torques_are_the_same_in_any_units() {
 /// decades, refused as `numerical_failure` at every N). Where G has full column rank,
 /// no wrench leaves every contact unloaded and every row's constant is the rounding of
 /// the passive torques' force, which the native solvers and Clarabel judged against
-/// itself: of these random grasps (wrench zeroed), 32 answers at N = 8 and exact were
-/// `infeasible` and 44 `numerical_failure`. Every answer, linear at N = 4, 8 and 16 and
+/// itself: of these random grasps (wrench zeroed; written out as problem files by a
+/// temporary dump, not kept), 32 answers at N = 8 and exact were `infeasible` and 44
+/// `numerical_failure`. Every answer, linear at N = 4, 8 and 16 and
 /// exact, is the direct SOCP's, in any units, and the fixture's is `u = −τ_p` with
 /// σ = Σ w τ_p², which every polyhedron's optimum shares.
 #[test]
