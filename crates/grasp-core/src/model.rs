@@ -463,6 +463,136 @@ fn flush_rows(
     }
 }
 
+/// Row and column scales that equilibrate `m` (every row's and column's largest entry
+/// near 1), by Ruiz's iteration: each pass divides by the square roots of the
+/// current largest entries, which halves the spread left in log scale. The result
+/// is, to that spread, the same for any diagonal scaling of `m` (any units). Zero
+/// rows and columns keep scale 1.
+fn ruiz(m: &Matrix) -> (Vec<f64>, Vec<f64>) {
+    let (rows, cols) = (m.nrows(), m.ncols());
+    let (mut r, mut c) = (vec![1.0; rows], vec![1.0; cols]);
+    let (mut rmax, mut cmax) = (vec![0.0f64; rows], vec![0.0f64; cols]);
+    for _ in 0..RUIZ_PASSES {
+        rmax.fill(0.0);
+        cmax.fill(0.0);
+        for i in 0..rows {
+            for (j, v) in m.row(i).iter().enumerate() {
+                let a = (r[i] * v * c[j]).abs();
+                rmax[i] = rmax[i].max(a);
+                cmax[j] = cmax[j].max(a);
+            }
+        }
+        let settled = |v: &f64| *v == 0.0 || (v - 1.0).abs() <= 0.1;
+        if rmax.iter().all(settled) && cmax.iter().all(settled) {
+            break;
+        }
+        for (s, v) in r.iter_mut().zip(&rmax).chain(c.iter_mut().zip(&cmax)) {
+            if *v > 0.0 {
+                *s /= v.sqrt();
+            }
+        }
+    }
+    (r, c)
+}
+
+/// Ruiz's passes at most: 53 binary orders of spread are within 10 % after 9.
+const RUIZ_PASSES: usize = 12;
+
+/// The largest spread of D's units (torsion lengths against 1 for the forces) at which
+/// its rank decision is taken as it stands, and the largest unit at which a full-rank
+/// grasp's force is still formed in D ([`metric_free_rank`]): at 1e6 beside levers of
+/// centimetres, the forces missed `G f = w` by 1e-8 of their terms. (Below 1, a short
+/// torsion length, D keeps mz to the precision its cone reads, and the equilibrated
+/// matrix moved σ by 1e-9.)
+const METRIC_SPREAD: f64 = 1e4;
+
+/// The decomposition of `M = R_D A D⁻¹` (A = `[G; E; Jᵀ]`, rows scaled by `rd`,
+/// columns by `dinv`: what `dec` decomposed) with the rank decided on `R A C`, R and C
+/// from [`ruiz`], where D's units spread past [`METRIC_SPREAD`] and `dec` dropped a
+/// direction that is not null there, or D has a unit past it; `None` otherwise.
+///
+/// A rank decided in the metric D depends on D's spread: with one contact's
+/// `mu_torsion` at 1e8 m beside levers of centimetres, mz's column of M is 1e9 times
+/// the forces', the forces' moments fell below the threshold, and a grasp of full rank
+/// lost one direction and then two: σ rose by 14 % at 1e7, and at 1e8 `G f = w` missed
+/// by 0.16 % of its terms, admitted as an unreachable wrench (fuzz_answers.py seed
+/// 181261). The equilibrated decision reads no units and no metric. At full column
+/// rank the force is unique and formed from `R A C`, R then the model's row scales (M
+/// at that rank lost σ by 1.3e-6 at 1e9 m, and the exact cones' certificate failed);
+/// with a null space, where the metric chooses the force, M is decomposed at that
+/// rank.
+fn metric_free_rank<'a>(
+    a_row: &impl Fn(usize) -> &'a [f64],
+    rd: &[f64],
+    dinv: &[f64],
+    dec: &crate::linalg::Decomposition,
+    tol: f64,
+) -> Result<Option<(Vec<f64>, crate::linalg::Decomposition)>, crate::linalg::SvdError> {
+    let (rows, n, q) = (rd.len(), dinv.len(), dec.null_basis.ncols());
+    // Within METRIC_SPREAD, D moves the decision by less than the threshold's margin.
+    let (lo, hi) = dinv.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &u| {
+        (lo.min(u), hi.max(u))
+    });
+    let (wide, long) = (hi > METRIC_SPREAD * lo, hi > METRIC_SPREAD);
+    if !wide || q == 0 && !long {
+        return Ok(None);
+    }
+    let mut data = Vec::with_capacity(rows * n);
+    for i in 0..rows {
+        data.extend_from_slice(a_row(i));
+    }
+    let a = Matrix::from_rows_data(rows, n, data);
+    let (r, c) = ruiz(&a);
+    let eq = Matrix::from_fn(rows, n, |i, j| r[i] * a[(i, j)] * c[j]);
+    let fro = norm2(eq.as_slice());
+    // A dropped direction f is null when ‖R A f‖ is at most `tol σ_max(R A C)` ‖C⁻¹ f‖,
+    // σ_max at most the Frobenius norm.
+    let null = q > 0
+        && (0..q).all(|k| {
+            let f: Vec<f64> = (0..n).map(|j| dinv[j] * dec.null_basis[(j, k)]).collect();
+            let h2: f64 = f.iter().zip(&c).map(|(v, cj)| (v / cj) * (v / cj)).sum();
+            let res2: f64 = (0..rows).map(|i| (r[i] * dot(a.row(i), &f)).powi(2)).sum();
+            res2 <= (tol * fro) * (tol * fro) * h2
+        });
+    if null {
+        return Ok(None);
+    }
+    let eqd = decompose(&eq, RankThreshold::Relative(tol))?;
+    let rank = eqd.rank();
+    if rank < n - q || rank == n - q && q > 0 {
+        return Ok(None);
+    }
+    if rank == n {
+        // Full column rank: the force is unique, `Z = C A_s⁺ R`, with R the model's row
+        // scales from here on and the forces in dec's coordinates, g = f / dinv.
+        let mut zm = eqd.pseudo_inverse();
+        for j in 0..n {
+            let s = c[j] / dinv[j];
+            zm.row_mut(j).iter_mut().for_each(|v| *v *= s);
+        }
+        return Ok(Some((
+            r,
+            crate::linalg::Decomposition {
+                row_basis: Matrix::identity(n),
+                row_transform: zm,
+                null_basis: Matrix::zeros(n, 0),
+                left_null: eqd.left_null,
+            },
+        )));
+    }
+    // A null space: the metric chooses the force, so M is decomposed, at that rank,
+    // with a threshold between its rank-th and next singular values (none where they
+    // are equal).
+    let m = Matrix::from_fn(rows, n, |i, j| rd[i] * a[(i, j)] * dinv[j]);
+    let s = crate::linalg::svd(&m)?.s;
+    let threshold = match (s.get(rank - 1), s.get(rank)) {
+        (Some(&last), Some(&next)) if next < last => (next * last).sqrt(),
+        _ => return Ok(None),
+    };
+    let d = decompose(&m, RankThreshold::Absolute(threshold))?;
+    Ok((d.rank() == rank).then(|| (rd.to_vec(), d)))
+}
+
 /// Per joint: a row of the consistency equalities' null basis (orthonormal, in the
 /// equilibrated torques) at or below this times the joint count is rounding of a zero
 /// row, a joint whose torque the equalities pin ([`GraspModel::eq_null`]). Pinned
@@ -501,21 +631,42 @@ impl GraspModel {
             .zip(&p.contacts)
             .map(|(&o, c)| o..o + c.dim())
             .collect();
+        // Which rows are rounding is judged with mz counted in a unit no longer than the
+        // contact's levers: mz/mu_torsion would make mz as strong as a force times
+        // mu_torsion, and at 3e7 m beside levers of 3 cm every moment row no normal
+        // has a component along (the pinch's moments about y and z) fell below its
+        // block's scale and was dropped, the wrench's moment with it (`G f − w` 0.02
+        // N·m on a moment of 0.02, answered `optimal`).
+        let mut flush_unit = force_unit.clone();
+        for (&o, c) in offsets.iter().zip(&p.contacts) {
+            if c.dim() == 4 {
+                let top = |js: std::ops::Range<usize>| {
+                    (3..6).fold(0.0f64, |a, i| {
+                        js.clone()
+                            .fold(a, |a, j| a.max(p.grasp_matrix[(i, j)].abs()))
+                    })
+                };
+                let lever = top(o..o + 3) / top(o + 3..o + 4);
+                if lever > 0.0 && lever < flush_unit[o + 3] {
+                    flush_unit[o + 3] = lever;
+                }
+            }
+        }
         let (jt, unactuated, mut actuators, row_targets) =
-            actuator_space(p, &force_unit, &cols, opts.rank_tolerance)?;
+            actuator_space(p, &flush_unit, &cols, opts.rank_tolerance)?;
         let (k, m) = (unactuated.nrows(), jt.nrows());
         // G's force rows and its moment rows, each block likewise.
         let g = &p.grasp_matrix;
         let mut scales = vec![0.0; 2 * n];
         let (fs, ms) = scales.split_at_mut(n);
-        contact_scales(g, 0..3, &force_unit, &cols, fs);
-        contact_scales(g, 3..6, &force_unit, &cols, ms);
+        contact_scales(g, 0..3, &flush_unit, &cols, fs);
+        contact_scales(g, 3..6, &flush_unit, &cols, ms);
         let scale = |i: usize| &scales[i / 3 * n..(i / 3 + 1) * n];
         let tol = opts.rank_tolerance;
-        let grasp = if (0..6).any(|i| negligible(g, i, &force_unit, scale(i), tol)) {
+        let grasp = if (0..6).any(|i| negligible(g, i, &flush_unit, scale(i), tol)) {
             let mut g = g.clone();
             for b in [0..3, 3..6] {
-                flush_rows(&mut g, b.clone(), &force_unit, scale(b.start), |_| tol);
+                flush_rows(&mut g, b.clone(), &flush_unit, scale(b.start), |_| tol);
             }
             std::borrow::Cow::Owned(g)
         } else {
@@ -632,6 +783,16 @@ impl GraspModel {
             }
         } else {
             decomposed(consistent)?
+        };
+        let (r, dec) = match consistent {
+            true => metric_free_rank(&a_row, &r, &dinv, &dec, opts.rank_tolerance)
+                .map_err(|_| ModelError::Decomposition {
+                    what: "[G; Jᵀ]",
+                    rows,
+                    cols: n,
+                })?
+                .unwrap_or((r, dec)),
+            false => (r, dec),
         };
         let rank = dec.rank();
         let zm = dec.pseudo_inverse();
