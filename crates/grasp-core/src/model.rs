@@ -498,12 +498,14 @@ fn ruiz(m: &Matrix) -> (Vec<f64>, Vec<f64>) {
 /// Ruiz's passes at most: 53 binary orders of spread are within 10 % after 9.
 const RUIZ_PASSES: usize = 12;
 
-/// The largest spread of D's units (torsion lengths against 1 for the forces) at which
-/// its rank decision is taken as it stands, and the largest unit at which a full-rank
-/// grasp's force is still formed in D ([`metric_free_rank`]): at 1e6 beside levers of
-/// centimetres, the forces missed `G f = w` by 1e-8 of their terms. (Below 1, a short
-/// torsion length, D keeps mz to the precision its cone reads, and the equilibrated
-/// matrix moved σ by 1e-9.)
+/// The largest spread of D's units measured in the contacts' levers (a torsion length
+/// over the contact's levers in G, 1 for the forces) at which its rank decision is
+/// taken as it stands, and the largest such unit at which a full-rank grasp's force
+/// is still formed in D ([`metric_free_rank`]): at 1e6 m beside levers of
+/// centimetres, the forces missed `G f = w` by 1e-8 of their terms. (Below the levers,
+/// a short torsion length, D keeps mz to the precision its cone reads, and the
+/// equilibrated matrix moved σ by 1e-9.) Measured in the levers, the decision is the
+/// same in any unit of length.
 const METRIC_SPREAD: f64 = 1e4;
 
 /// The decomposition of `M = R_D A D⁻¹` (A = `[G; E; Jᵀ]`, rows scaled by `rd`,
@@ -525,14 +527,19 @@ fn metric_free_rank<'a>(
     a_row: &impl Fn(usize) -> &'a [f64],
     rd: &[f64],
     dinv: &[f64],
+    levers: &[f64],
     dec: &crate::linalg::Decomposition,
     tol: f64,
 ) -> Result<Option<(Vec<f64>, crate::linalg::Decomposition)>, crate::linalg::SvdError> {
     let (rows, n, q) = (rd.len(), dinv.len(), dec.null_basis.ncols());
-    // Within METRIC_SPREAD, D moves the decision by less than the threshold's margin.
-    let (lo, hi) = dinv.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &u| {
-        (lo.min(u), hi.max(u))
-    });
+    // D's units against the contacts' levers, unit-free. Within METRIC_SPREAD, D moves
+    // the decision by less than the threshold's margin.
+    let (lo, hi) = dinv
+        .iter()
+        .zip(levers)
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), (&u, &l)| {
+            (lo.min(u / l), hi.max(u / l))
+        });
     let (wide, long) = (hi > METRIC_SPREAD * lo, hi > METRIC_SPREAD);
     if !wide || q == 0 && !long {
         return Ok(None);
@@ -637,7 +644,8 @@ impl GraspModel {
         // has a component along (the pinch's moments about y and z) fell below its
         // block's scale and was dropped, the wrench's moment with it (`G f − w` 0.02
         // N·m on a moment of 0.02, answered `optimal`).
-        let mut flush_unit = force_unit.clone();
+        // (`levers`: per column, the length its unit is measured against, 1 on forces.)
+        let (mut flush_unit, mut levers) = (force_unit.clone(), vec![1.0; n]);
         for (&o, c) in offsets.iter().zip(&p.contacts) {
             if c.dim() == 4 {
                 let top = |js: std::ops::Range<usize>| {
@@ -647,8 +655,9 @@ impl GraspModel {
                     })
                 };
                 let lever = top(o..o + 3) / top(o + 3..o + 4);
-                if lever > 0.0 && lever < flush_unit[o + 3] {
-                    flush_unit[o + 3] = lever;
+                if lever > 0.0 && lever.is_finite() {
+                    levers[o + 3] = lever;
+                    flush_unit[o + 3] = flush_unit[o + 3].min(lever);
                 }
             }
         }
@@ -785,7 +794,7 @@ impl GraspModel {
             decomposed(consistent)?
         };
         let (r, dec) = match consistent {
-            true => metric_free_rank(&a_row, &r, &dinv, &dec, opts.rank_tolerance)
+            true => metric_free_rank(&a_row, &r, &dinv, &levers, &dec, opts.rank_tolerance)
                 .map_err(|_| ModelError::Decomposition {
                     what: "[G; Jᵀ]",
                     rows,

@@ -745,7 +745,8 @@ fn torsion(c: &mut ContactModel) -> Option<&mut f64> {
 /// Ruiz-equilibrated matrix, which reads no metric. On random grasps of full rank with
 /// one soft finger's mu_torsion raised so, and the fixture: no passive internal
 /// force, σ* the direct SOCP's (which uses no Z), N = 8 at or above it, `G f = w` to
-/// 1e-7 of its terms, and σ* no higher than at mu_torsion / 10.
+/// 1e-7 of its terms, the same σ* with lengths in km and in 10 km, and σ* no higher
+/// than at mu_torsion / 10.
 #[test]
 fn a_torsion_length_far_past_the_levers_drops_no_direction() {
     let fixture = fuzz_fixture("long-torsion-length");
@@ -805,6 +806,19 @@ fn a_torsion_length_far_past_the_levers_drops_no_direction() {
                 lin.objective >= sigma * (1.0 - 1e-9),
                 "{name}: σ(8) {} below σ* {sigma}",
                 lin.objective
+            );
+        }
+        // The same grasp in km and in units of 10 km. (In megametres, seed 98's
+        // consistency rows lose one to the rank decision, as they do in every unit at
+        // 8dec3db: docs/benchmarks.md, "A torsion length far past the levers".)
+        for l in [1e-3, 1e-4] {
+            let s = run(&rescale(p, l, 1.0), Backend::ActiveSet, Cones::Exact);
+            assert_eq!(s.status, Status::Optimal, "{name} × {l}: {:?}", s.reason);
+            assert!(
+                rel(s.objective / (l * l), exact.objective) <= 1e-7,
+                "{name} × {l}: σ {} against {}",
+                s.objective / (l * l),
+                exact.objective
             );
         }
         // A shorter torsion length, a smaller cone: σ* no lower.
