@@ -464,13 +464,14 @@ fn flush_rows(
 }
 
 /// Row and column scales that equilibrate `m` (every row's and column's largest entry
-/// near 1), by Ruiz's iteration: each pass divides by the square roots of the
-/// current largest entries, which halves the spread left in log scale. The result
-/// is, to that spread, the same for any diagonal scaling of `m` (any units). Zero
-/// rows and columns keep scale 1.
-fn ruiz(m: &Matrix) -> (Vec<f64>, Vec<f64>) {
+/// near 1), by Ruiz's iteration from the scales `r`, `c`: each pass divides by the
+/// square roots of the current largest entries, which halves the spread left in log
+/// scale. Its passes stop at the first matrix whose rows and columns each have an
+/// entry near 1, and which one that is depends on the start: the caller starts from
+/// scales that leave the scaled matrix the same in any units. Zero rows and columns
+/// keep their scales.
+fn ruiz(m: &Matrix, mut r: Vec<f64>, mut c: Vec<f64>) -> (Vec<f64>, Vec<f64>) {
     let (rows, cols) = (m.nrows(), m.ncols());
-    let (mut r, mut c) = (vec![1.0; rows], vec![1.0; cols]);
     let (mut rmax, mut cmax) = (vec![0.0f64; rows], vec![0.0f64; cols]);
     for _ in 0..RUIZ_PASSES {
         rmax.fill(0.0);
@@ -549,7 +550,30 @@ fn metric_free_rank<'a>(
         data.extend_from_slice(a_row(i));
     }
     let a = Matrix::from_rows_data(rows, n, data);
-    let (r, c) = ruiz(&a);
+    // Ruiz's passes start from mz counted in the contact's levers and each row then
+    // scaled to a largest entry of 1: a change of the unit of length (or of any
+    // joint's or wrench component's unit) leaves that matrix as it was, so the passes
+    // and the decisions below read no unit. From unit scales they stopped at once with
+    // lengths in megametres, where a soft finger's moment rows held their levers at
+    // 5e-8 beside mz's entry of 1: G's smallest singular value fell with the unit
+    // (5.8e-4 in metres, 5.8e-10 in megametres) and a consistency row fell below the
+    // rank threshold (σ 1.34 against 7.80).
+    let c0 = levers.to_vec();
+    let r0 = (0..rows)
+        .map(|i| {
+            let top = a
+                .row(i)
+                .iter()
+                .zip(&c0)
+                .fold(0.0f64, |t, (v, cj)| t.max((v * cj).abs()));
+            if top > 0.0 {
+                1.0 / top
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let (r, c) = ruiz(&a, r0, c0);
     let eq = Matrix::from_fn(rows, n, |i, j| r[i] * a[(i, j)] * c[j]);
     let fro = norm2(eq.as_slice());
     // A dropped direction f is null when ‖R A f‖ is at most `tol σ_max(R A C)` ‖C⁻¹ f‖,
