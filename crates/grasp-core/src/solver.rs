@@ -93,6 +93,12 @@ pub enum Reason {
         violation: f64,
         /// The relative tolerance that applied.
         tolerance: f64,
+        /// Each check's worst row as a fraction of that row's bound, which the size of
+        /// its own terms sets (above 1 fails): [`Diagnostics::wrench_check`],
+        /// [`Diagnostics::torque_check`], and the larger of
+        /// [`Diagnostics::violation_check`] and [`Diagnostics::cone_check`]. A residual
+        /// far below the tolerance can fail on a row whose terms are smaller still.
+        checks: [f64; 3],
     },
     /// Infeasible for `cause`, on a hand whose joint torques must stay in the range of
     /// its transmission: the directions no actuator produces are named.
@@ -149,10 +155,21 @@ impl fmt::Display for Reason {
                 let names: Vec<String> = blocking.iter().map(RowId::to_string).collect();
                 write!(f, "conflicting rows: {})", names.join(", "))
             }
-            Reason::ResidualCheck { wrench_residual, torque_residual, violation, tolerance } => write!(
-                f,
-                "the backend's answer failed the residual check at relative tolerance {tolerance:.1e}: ‖G f − w‖∞ = {wrench_residual:.3e}, ‖Jᵀ f − τ‖∞ = {torque_residual:.3e}, largest constraint violation {violation:.3e}"
-            ),
+            Reason::ResidualCheck { wrench_residual, torque_residual, violation, tolerance, checks } => {
+                let of = |c: f64| match c {
+                    c if !c.is_finite() => "not finite against its bound".to_string(),
+                    0.0 => "within its row's bound".to_string(),
+                    c if (1e-3..1e4).contains(&c) => format!("{c:.3} times its row's bound"),
+                    c => format!("{c:.1e} times its row's bound"),
+                };
+                write!(
+                    f,
+                    "the backend's answer failed the residual check at relative tolerance {tolerance:.1e}, each row against the size of its terms: ‖G f − w‖∞ = {wrench_residual:.3e} ({}), ‖Jᵀ f − τ‖∞ = {torque_residual:.3e} ({}), largest constraint violation {violation:.3e} ({})",
+                    of(checks[0]),
+                    of(checks[1]),
+                    of(checks[2])
+                )
+            }
             Reason::Underactuated { unactuated, cause } => write!(
                 f,
                 "{cause}; the hand is underactuated: Jᵀ f must lie in the range of the transmission, and no actuator produces joint torque along {}",
@@ -1041,6 +1058,11 @@ impl TorqueQp {
                 torque_residual: d.torque_residual,
                 violation: d.max_violation.max(d.cone_violation),
                 tolerance: tol,
+                checks: [
+                    d.wrench_check,
+                    d.torque_check,
+                    d.violation_check.max(d.cone_check),
+                ],
             });
             out.warnings.push(format!(
                 "{backend} called this answer optimal, but it failed the residual check"

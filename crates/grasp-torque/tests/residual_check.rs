@@ -6,7 +6,7 @@
 //! moved off its optimum along one joint is no longer called optimal.
 #![cfg(feature = "active-set")]
 
-use grasp_torque::{GraspSolver, Matrix, Solution, SolverConfig, Status, WarmStart};
+use grasp_torque::{GraspSolver, Matrix, Reason, Solution, SolverConfig, Status, WarmStart};
 
 /// `max_i |M_i x − t_i|` and the largest `Σ_j |M_ij x_j| + |t_i|` (the sums' size).
 fn residual(m: &Matrix, x: &[f64], t: &[f64]) -> (f64, f64) {
@@ -115,6 +115,17 @@ fn residuals_match_a_plain_recomputation_and_a_moved_answer_fails() {
             .fold(0.0, f64::max);
         if d.consistency_residual > 1e-6 * size {
             assert_eq!(moved.status, Status::NumericalFailure, "{label}: {d:?}");
+            // The reason says which check failed, as the diagnostics measured it.
+            let Some(Reason::ResidualCheck { checks, .. }) = moved.reason else {
+                panic!("{label}: {:?}", moved.reason)
+            };
+            let measured = [
+                d.wrench_check,
+                d.torque_check,
+                d.violation_check.max(d.cone_check),
+            ];
+            assert_eq!(checks, measured, "{label}");
+            assert!(checks.iter().any(|&c| c > 1.0), "{label}: {checks:?}");
             failed += 1;
         }
     }
