@@ -629,7 +629,13 @@ impl ExactSolver {
     /// terms. Newton comes first because its answer is the more accurate: on the
     /// grasps that found this, σ within 4e-12 of Clarabel's where the iterate's is
     /// within 2e-9 to 2e-8.
-    fn finish_from_best(&mut self, w: &[f64; 6], alpha: f64, out: &mut Solution) -> bool {
+    fn finish_from_best(
+        &mut self,
+        w: &[f64; 6],
+        alpha: f64,
+        newton_after: bool,
+        out: &mut Solution,
+    ) -> bool {
         let Some(ipm) = self.ipm.as_mut() else {
             return false;
         };
@@ -644,9 +650,10 @@ impl ExactSolver {
         }
         ipm.dual_into(&self.conic, &mut self.dual);
         // (Newton reads the pair, it does not change it.)
-        if self
-            .newton
-            .adopt(&self.conic, &self.ipm_x, &self.dual, w, alpha)
+        if newton_after
+            && self
+                .newton
+                .adopt(&self.conic, &self.ipm_x, &self.dual, w, alpha)
             && self.try_newton(w, alpha, true, out)
         {
             out.method = Some("interior_point_newton");
@@ -882,6 +889,46 @@ impl TorqueSolver for ExactSolver {
             }
         }
         // 4. The interior-point fallback.
+        self.interior_point(w, alpha, lin_optimal, inscribed_feasible, true, out);
+    }
+
+    /// The interior-point method alone, its own iterate certified (no Newton's step
+    /// from it): where Newton's answer passed the certificate (each row against the
+    /// size of its terms, which the passive torques' cancelling forces can make 1000
+    /// times the contact forces) and the core's check refused it (a contact 1.7e-6
+    /// outside its cone on forces of 3.3; `fuzz_answers.py` seed 203989, where
+    /// Clarabel's exact σ is the interior-point method's to 2e-12).
+    fn solve_fallback(&mut self, w: &[f64; 6], out: &mut Solution) -> bool {
+        if self.newton.is_point() {
+            return false;
+        }
+        let alpha = self.conic.b_into(w, &mut self.b);
+        if alpha == 0.0 {
+            return false;
+        }
+        out.active_set = None;
+        out.iterations = 0;
+        out.torque.clear();
+        out.internal_forces.clear();
+        out.method = None;
+        // Newton's answer held the grasp to the certificate's tolerance: feasible.
+        self.interior_point(w, alpha, true, true, false, out);
+        true
+    }
+}
+
+impl ExactSolver {
+    /// Step 4, the interior-point method (see the module's documentation); with
+    /// `newton_after`, Newton's method from its best iterate first where it ends short.
+    fn interior_point(
+        &mut self,
+        w: &[f64; 6],
+        alpha: f64,
+        lin_optimal: bool,
+        inscribed_feasible: bool,
+        newton_after: bool,
+        out: &mut Solution,
+    ) {
         self.hot = None;
         let reach = if lin_optimal {
             0.0
@@ -941,7 +988,7 @@ impl TorqueSolver for ExactSolver {
         // (The method's own certificate, for the report: the best iterate's and
         // Newton's replace it.)
         let c = self.certificate;
-        if self.finish_from_best(w, alpha, out) {
+        if self.finish_from_best(w, alpha, newton_after, out) {
             return;
         }
         if !inscribed_feasible {

@@ -496,6 +496,18 @@ pub trait TorqueSolver: Send {
     /// `iterations`, `active_set` and `multipliers` of `out`, reusing its buffers.
     /// Inputs have been checked by [`solve_into`], which also fills the rest.
     fn solve_raw(&mut self, wrench: &[f64; 6], warm: &WarmStart<'_>, out: &mut Solution);
+
+    /// A second answer for `wrench`, by a method of the backend's own that does not
+    /// share the first's path, after [`Self::solve_raw`]'s answer failed the core's
+    /// residual check; sets `out` as `solve_raw` does. `false` (and `out` untouched)
+    /// where the backend has none, the default. The core checks it as it checked the
+    /// first. The native exact solver's interior-point method is one: Newton's method
+    /// stops on a point its certificate admits, measured against the size of every
+    /// row's terms, which the core can refuse against the contact forces' scale.
+    fn solve_fallback(&mut self, wrench: &[f64; 6], out: &mut Solution) -> bool {
+        let _ = (wrench, out);
+        false
+    }
 }
 
 /// How much of an answer the core completes and checks after the backend's solve.
@@ -586,31 +598,8 @@ pub fn solve_into_with(
         out.torque.clear();
         out.iterations = 0;
         out.active_set = None;
-    } else if qp.model.passive.is_empty() {
-        solver.solve_raw(wrench, warm, out);
     } else {
-        // The backend's variable is v = u − u_p (model::Passive): a warm start's torque
-        // goes in shifted (in the joint torques' buffer, which the check refills), the
-        // answer comes out shifted back.
-        let offset = &qp.model.passive.torque_offset;
-        let mut shifted = std::mem::take(&mut out.joint_torque);
-        let warm = match warm.torque {
-            Some(t) => {
-                shifted.clear();
-                shifted.extend(t.iter().zip(offset).map(|(t, o)| t - o));
-                WarmStart {
-                    torque: Some(&shifted),
-                    active_set: warm.active_set,
-                }
-            }
-            None => *warm,
-        };
-        solver.solve_raw(wrench, &warm, out);
-        out.joint_torque = shifted;
-        let offset = &solver.problem().model.passive.torque_offset;
-        if out.torque.len() == offset.len() {
-            out.torque.iter_mut().zip(offset).for_each(|(t, o)| *t += o);
-        }
+        backend_solve(solver, wrench, warm, false, out);
     }
     out.solve_time = start.map_or(Duration::ZERO, |t| t.elapsed());
     let tol = solver.residual_tolerance();
@@ -619,6 +608,25 @@ pub fn solve_into_with(
     if !(lazy && qp.complete_lazy(tol, out)) {
         qp.complete(wrench, tol, solver.name(), out);
     }
+    // An answer the backend called optimal and the check refused: the backend's
+    // fallback, if it has one, checked in full likewise.
+    if out.status == Status::NumericalFailure
+        && matches!(out.reason, Some(Reason::ResidualCheck { .. }))
+        && backend_solve(solver, wrench, warm, true, out)
+    {
+        out.warnings.clear();
+        out.reason = None;
+        out.multipliers.clear();
+        out.solve_time = start.map_or(Duration::ZERO, |t| t.elapsed());
+        let qp = solver.problem();
+        qp.complete(wrench, tol, solver.name(), out);
+        out.warnings.push(format!(
+            "{}'s first answer failed the residual check; this one is its fallback's ({})",
+            solver.name(),
+            out.method.unwrap_or("another method")
+        ));
+    }
+    let qp = solver.problem();
     if let Some(a) = &qp.model.actuators {
         if out.status == Status::Infeasible && a.unactuated_directions.nrows() > 0 {
             if let Some(cause) = out.reason.take() {
@@ -630,6 +638,53 @@ pub fn solve_into_with(
         }
     }
     Ok(())
+}
+
+/// The backend's solve ([`TorqueSolver::solve_raw`], or with `fallback` its
+/// [`TorqueSolver::solve_fallback`], whose return this is) in the backend's variable
+/// `v = u − u_p` where the model has passive torques (model::Passive): a warm start's
+/// torque goes in shifted (in the joint torques' buffer, which the check refills), the
+/// answer comes out shifted back.
+fn backend_solve(
+    solver: &mut dyn TorqueSolver,
+    wrench: &[f64; 6],
+    warm: &WarmStart<'_>,
+    fallback: bool,
+    out: &mut Solution,
+) -> bool {
+    let run = |solver: &mut dyn TorqueSolver, warm: &WarmStart<'_>, out: &mut Solution| {
+        if fallback {
+            solver.solve_fallback(wrench, out)
+        } else {
+            solver.solve_raw(wrench, warm, out);
+            true
+        }
+    };
+    if solver.problem().model.passive.is_empty() {
+        return run(solver, warm, out);
+    }
+    let mut shifted = std::mem::take(&mut out.joint_torque);
+    let solved = {
+        let offset = &solver.problem().model.passive.torque_offset;
+        let warm = match warm.torque {
+            Some(t) => {
+                shifted.clear();
+                shifted.extend(t.iter().zip(offset).map(|(t, o)| t - o));
+                WarmStart {
+                    torque: Some(&shifted),
+                    active_set: warm.active_set,
+                }
+            }
+            None => *warm,
+        };
+        run(solver, &warm, out)
+    };
+    out.joint_torque = shifted;
+    let offset = &solver.problem().model.passive.torque_offset;
+    if solved && out.torque.len() == offset.len() {
+        out.torque.iter_mut().zip(offset).for_each(|(t, o)| *t += o);
+    }
+    solved
 }
 
 /// [`solve_into`] into a fresh [`Solution`].

@@ -898,3 +898,42 @@ fn a_moment_row_beside_a_long_torsion_length_is_kept() {
         }
     }
 }
+
+/// Passive torques alone, whose forces cancel to 3.3 N from terms 1000 times larger
+/// (`fixtures/fuzz/cancelled-forces-off-the-cone.json`, `fuzz_answers.py` seed 203989):
+/// Newton's answer was 1.7e-6 N outside contact 0's cone, within the certificate's
+/// tolerance of its rows' terms and five times the core's bound on the contact forces,
+/// so the core refused it (`numerical_failure`). The core now asks the backend for its
+/// fallback, the interior-point method's own certified iterate, which it checks as it
+/// checked the first: σ is the direct SOCP's, cold and in a control loop.
+#[test]
+fn an_answer_the_check_refuses_is_solved_again_by_the_fallback() {
+    let p = fuzz_fixture("cancelled-forces-off-the-cone");
+    let Direct::Optimal(sigma, _) = direct(&p) else {
+        panic!("the direct SOCP holds this grasp")
+    };
+    let config = SolverConfig {
+        cones: Cones::Exact,
+        ..Default::default()
+    };
+    let mut solver = GraspSolver::new(&p, &config).unwrap();
+    let near: [f64; 6] = std::array::from_fn(|i| p.wrench[i] + 1e-3 * (i as f64 - 2.5));
+    for w in [p.wrench, near, p.wrench] {
+        let s = solver.resolve(&w).unwrap();
+        assert_eq!(s.status, Status::Optimal, "{:?}", s.reason);
+        if w == p.wrench {
+            assert!(
+                rel(s.objective, sigma) <= 1e-9,
+                "σ {} against the direct SOCP's {sigma}",
+                s.objective
+            );
+        }
+    }
+    let s = run(&p, Backend::ActiveSet, Cones::Exact);
+    assert_eq!(s.status, Status::Optimal, "{:?}", s.reason);
+    assert!(
+        s.warnings.iter().any(|w| w.contains("fallback")),
+        "{:?}",
+        s.warnings
+    );
+}
