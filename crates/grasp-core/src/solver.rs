@@ -609,22 +609,36 @@ pub fn solve_into_with(
         qp.complete(wrench, tol, solver.name(), out);
     }
     // An answer the backend called optimal and the check refused: the backend's
-    // fallback, if it has one, checked in full likewise.
+    // fallback, if it has one, checked in full likewise. Where that gives no answer
+    // either, the first refusal is the report (its figures say what failed). (The
+    // copy is made only here, after a refusal.)
     if out.status == Status::NumericalFailure
         && matches!(out.reason, Some(Reason::ResidualCheck { .. }))
-        && backend_solve(solver, wrench, warm, true, out)
     {
-        out.warnings.clear();
-        out.reason = None;
-        out.multipliers.clear();
-        out.solve_time = start.map_or(Duration::ZERO, |t| t.elapsed());
-        let qp = solver.problem();
-        qp.complete(wrench, tol, solver.name(), out);
-        out.warnings.push(format!(
-            "{}'s first answer failed the residual check; this one is its fallback's ({})",
-            solver.name(),
-            out.method.unwrap_or("another method")
-        ));
+        let first = out.clone();
+        if backend_solve(solver, wrench, warm, true, out) {
+            out.warnings.clear();
+            out.reason = None;
+            out.multipliers.clear();
+            out.solve_time = start.map_or(Duration::ZERO, |t| t.elapsed());
+            let qp = solver.problem();
+            qp.complete(wrench, tol, solver.name(), out);
+            let method = out.method.unwrap_or("another method");
+            let note = if out.status.has_answer() {
+                format!(
+                    "{}'s first answer failed the residual check; this one is its fallback's ({method})",
+                    solver.name()
+                )
+            } else {
+                let status = out.status;
+                *out = first;
+                format!(
+                    "{}'s fallback ({method}) gave no answer either ({status})",
+                    solver.name()
+                )
+            };
+            out.warnings.push(note);
+        }
     }
     let qp = solver.problem();
     if let Some(a) = &qp.model.actuators {

@@ -89,6 +89,8 @@ fn lazy_answers_equal_full_ones_and_diagnose_completes_them() {
 struct Tampered {
     inner: Box<dyn TorqueSolver>,
     change: fn(&mut Solution),
+    /// A fallback: the inner solver's cold answer, changed so.
+    fallback: Option<fn(&mut Solution)>,
 }
 
 impl TorqueSolver for Tampered {
@@ -108,6 +110,14 @@ impl TorqueSolver for Tampered {
         self.inner.solve_raw(w, warm, out);
         (self.change)(out);
     }
+    fn solve_fallback(&mut self, w: &[f64; 6], out: &mut Solution) -> bool {
+        let Some(change) = self.fallback else {
+            return false;
+        };
+        self.inner.solve_raw(w, &WarmStart::default(), out);
+        change(out);
+        true
+    }
 }
 
 /// Whether the untampered solver finds an optimum (only those are tampered with).
@@ -122,7 +132,50 @@ fn tampered(p: &GraspProblem, change: fn(&mut Solution)) -> GraspSolver {
     let config = SolverConfig::default();
     let inner = config.build(config.qp(p).unwrap()).unwrap();
     assert!(inner.capabilities().certifies_rows);
-    GraspSolver::from_backend(Box::new(Tampered { inner, change })).with_check(Check::Lazy)
+    GraspSolver::from_backend(Box::new(Tampered {
+        inner,
+        change,
+        fallback: None,
+    }))
+    .with_check(Check::Lazy)
+}
+
+/// An answer the check refuses goes to the backend's fallback, checked in full: its
+/// answer where it passes (with a warning that says so), else the first refusal's
+/// report.
+#[test]
+fn a_refused_answer_goes_to_the_fallback_and_only_a_passing_one_replaces_it() {
+    let config = SolverConfig::default();
+    for (label, p) in problems().into_iter().filter(|(_, p)| solvable(p)) {
+        let nan: fn(&mut Solution) = |s| s.torque[0] = f64::NAN;
+        let keep: fn(&mut Solution) = |_| {};
+        for (fallback, passes) in [(keep, true), (nan, false)] {
+            let inner = config.build(config.qp(&p).unwrap()).unwrap();
+            let mut s = GraspSolver::from_backend(Box::new(Tampered {
+                inner,
+                change: nan,
+                fallback: Some(fallback),
+            }));
+            let a = s.solve(&p.wrench, &WarmStart::default()).unwrap();
+            let said = |what: &str| a.warnings.iter().any(|w| w.contains(what));
+            if passes {
+                assert_eq!(a.status, Status::Optimal, "{label}: {:?}", a.reason);
+                assert!(
+                    said("this one is its fallback's"),
+                    "{label}: {:?}",
+                    a.warnings
+                );
+            } else {
+                assert_eq!(a.status, Status::NumericalFailure, "{label}");
+                assert!(
+                    matches!(a.reason, Some(Reason::ResidualCheck { .. })),
+                    "{label}: {:?}",
+                    a.reason
+                );
+                assert!(said("gave no answer either"), "{label}: {:?}", a.warnings);
+            }
+        }
+    }
 }
 
 #[test]
