@@ -625,6 +625,7 @@ pub fn solve_into_with(
             qp.complete(wrench, tol, solver.name(), out);
             let method = out.method.unwrap_or("another method");
             let note = if out.status.has_answer() {
+                out.iterations += first.iterations;
                 format!(
                     "{}'s first answer failed the residual check; this one is its fallback's ({method})",
                     solver.name()
