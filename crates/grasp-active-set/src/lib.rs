@@ -195,6 +195,20 @@ const S_ROW: usize = usize::MAX;
 pub struct ActiveSetSolver {
     qp: TorqueQp,
     engine: Engine,
+    /// The interior-point method on the same polyhedra, built at the first answer the
+    /// core's check refuses ([`TorqueSolver::solve_fallback`]).
+    fallback: Option<Box<Fallback>>,
+}
+
+/// The interior-point method on the conic form of the linearised problem (its faces
+/// as nonnegative rows), with its buffers.
+#[derive(Clone, Debug)]
+struct Fallback {
+    conic: ConicForm,
+    ipm: ipm::Ipm,
+    b: Vec<f64>,
+    dual: Vec<f64>,
+    scratch: Vec<f64>,
 }
 
 /// The native solver on the contact-force-space baseline ([`ForceSpaceQp`]): its
@@ -285,7 +299,11 @@ impl ActiveSetSolver {
     /// only inscribed cones and fixed internal forces ([`CAPABILITIES`]).
     pub fn new(qp: TorqueQp, settings: ActiveSetSettings) -> Result<Self, BuildError> {
         let engine = Engine::new(&qp.least_distance(), settings)?;
-        Ok(Self { qp, engine })
+        Ok(Self {
+            qp,
+            engine,
+            fallback: None,
+        })
     }
 
     /// As [`Self::new`], with the equalities eliminated by `other` when `qp` has the
@@ -309,7 +327,11 @@ impl ActiveSetSolver {
         } else {
             Engine::new(&ld, settings)?
         };
-        Ok(Self { qp, engine })
+        Ok(Self {
+            qp,
+            engine,
+            fallback: None,
+        })
     }
 
     /// As [`Self::new`] for a polyhedral view of the grasp of `form` (the exact view's
@@ -357,7 +379,11 @@ impl ActiveSetSolver {
             _ => Equalities::new(&ld)?,
         };
         let engine = Engine::with_equalities(&ld, settings, eqs)?;
-        Ok(Self { qp, engine })
+        Ok(Self {
+            qp,
+            engine,
+            fallback: None,
+        })
     }
 
     /// The settings in use.
@@ -753,6 +779,60 @@ impl TorqueSolver for ActiveSetSolver {
             self.engine.solve(w, &WarmStart::default(), out);
             out.iterations += iterations;
         }
+    }
+
+    /// The interior-point method on the same polyhedra, its iterate certified from
+    /// scratch ([`ConicForm::certificate`]). `false` where it does not converge to a
+    /// certified answer (it proves no infeasibility).
+    fn solve_fallback(&mut self, w: &[f64; 6], out: &mut Solution) -> bool {
+        let qp = &self.qp;
+        let f = self.fallback.get_or_insert_with(|| {
+            let conic = ConicForm::new(qp);
+            let ipm = ipm::Ipm::new(&conic, ipm::IpmSettings::default());
+            let rows = conic.rows();
+            Box::new(Fallback {
+                conic,
+                ipm,
+                b: vec![0.0; rows],
+                dual: vec![0.0; rows],
+                scratch: Vec::new(),
+            })
+        });
+        let alpha = f.conic.b_into(w, &mut f.b);
+        if alpha == 0.0 {
+            return false;
+        }
+        let end = f.ipm.solve(&f.conic, &f.b, &mut |_| false);
+        if !matches!(end, ipm::IpmEnd::Converged) {
+            if !f.ipm.best_merit.is_finite() {
+                return false;
+            }
+            f.ipm.restore_best();
+        }
+        let nx = f.conic.nx;
+        f.ipm.dual_into(&f.conic, &mut f.dual);
+        let c = f.conic.certificate(
+            &f.b,
+            &f.ipm.x[..nx],
+            &f.dual,
+            CERTIFICATE_TOLERANCE,
+            &mut f.scratch,
+        );
+        if !c.passed {
+            return false;
+        }
+        out.status = Status::Optimal;
+        out.reason = None;
+        out.active_set = None;
+        out.iterations = f.ipm.iterations;
+        out.method = Some("interior_point");
+        f.conic.unscale_into(
+            &f.ipm.x[..nx],
+            alpha,
+            &mut out.torque,
+            &mut out.internal_forces,
+        );
+        true
     }
 }
 

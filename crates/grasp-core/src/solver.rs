@@ -501,9 +501,10 @@ pub trait TorqueSolver: Send {
     /// share the first's path, after [`Self::solve_raw`]'s answer failed the core's
     /// residual check; sets `out` as `solve_raw` does. `false` (and `out` untouched)
     /// where the backend has none, the default. The core checks it as it checked the
-    /// first. The native exact solver's interior-point method is one: Newton's method
-    /// stops on a point its certificate admits, measured against the size of every
-    /// row's terms, which the core can refuse against the contact forces' scale.
+    /// first. The native solvers' interior-point method is one: Newton's method stops
+    /// on a point its certificate admits, measured against the size of every row's
+    /// terms, and the active-set method on one its rows normalised in y admit, both of
+    /// which the core can refuse against the contact forces' scale.
     fn solve_fallback(&mut self, wrench: &[f64; 6], out: &mut Solution) -> bool {
         let _ = (wrench, out);
         false

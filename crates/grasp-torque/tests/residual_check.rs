@@ -235,3 +235,61 @@ fn each_check_ratio_is_the_check_decision() {
         "{passed} passed, {refused} refused"
     );
 }
+
+/// A row of Jᵀ scaled by 438 on a sweep grasp
+/// (`fixtures/fuzz/scaled-row-refused-then-held.json`, `fuzz_answers.py` seed 200593):
+/// the native active-set answer at N = 8 ended 7.4e-2 outside a face, within its
+/// tolerance on rows normalised in y and 3.1e4 times the core's bound, and was
+/// refused (`numerical_failure`). The core now asks for the backend's fallback, the
+/// interior-point method on the same polyhedra, and checks it: it holds the grasp at
+/// the exported QP's optimum (7.41535882931192 by cvxpy with Clarabel on `export-qp
+/// --sides 8`, whose point misses the rows by 3e-13), and more sides give a σ no
+/// higher, down to the exact cones'.
+#[test]
+fn a_refused_linear_answer_is_held_by_the_interior_point_method() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/fuzz/scaled-row-refused-then-held.json"
+    );
+    let p = grasp_torque::load_problem(path).unwrap();
+    let mut last = f64::INFINITY;
+    for (sides, cones) in [
+        (4, grasp_torque::Cones::Linear),
+        (8, grasp_torque::Cones::Linear),
+        (16, grasp_torque::Cones::Linear),
+        (32, grasp_torque::Cones::Linear),
+        (8, grasp_torque::Cones::Exact),
+    ] {
+        let mut q = p.clone();
+        q.linearization.sides = sides;
+        let config = SolverConfig {
+            cones,
+            ..Default::default()
+        };
+        let s = GraspSolver::new(&q, &config)
+            .unwrap()
+            .solve(&q.wrench, &WarmStart::default())
+            .unwrap()
+            .clone();
+        let at = format!("{cones:?} at N = {sides}");
+        assert_eq!(s.status, Status::Optimal, "{at}: {:?}", s.reason);
+        if sides == 8 && cones == grasp_torque::Cones::Linear {
+            assert!(
+                (s.objective - 7.41535882931192).abs() <= 1e-9 * s.objective,
+                "{at}: σ {}",
+                s.objective
+            );
+            assert!(
+                s.warnings.iter().any(|w| w.contains("fallback")),
+                "{at}: {:?}",
+                s.warnings
+            );
+        }
+        assert!(
+            s.objective <= last * (1.0 + 1e-9),
+            "{at}: σ {} above {last}",
+            s.objective
+        );
+        last = s.objective;
+    }
+}
