@@ -6,9 +6,20 @@
 //! moved off its optimum along one joint is no longer called optimal.
 #![cfg(feature = "active-set")]
 
-use grasp_torque::{GraspSolver, Matrix, Reason, Solution, SolverConfig, Status, WarmStart};
+use grasp_torque::{
+    GraspProblem, GraspSolver, Matrix, Reason, Solution, SolverConfig, Status, WarmStart,
+};
 
 /// `max_i |M_i x − t_i|` and the largest `Σ_j |M_ij x_j| + |t_i|` (the sums' size).
+/// A cold solve of `q` at its own wrench.
+fn solved(q: &GraspProblem, config: &SolverConfig) -> Solution {
+    GraspSolver::new(q, config)
+        .unwrap()
+        .solve(&q.wrench, &WarmStart::default())
+        .unwrap()
+        .clone()
+}
+
 fn residual(m: &Matrix, x: &[f64], t: &[f64]) -> (f64, f64) {
     (0..m.nrows()).fold((0.0f64, 0.0f64), |(r, s), i| {
         let row = m.row(i);
@@ -156,11 +167,7 @@ fn a_moment_no_contact_makes_is_unreachable() {
                     cones,
                     ..Default::default()
                 };
-                let s = GraspSolver::new(&q, &config)
-                    .unwrap()
-                    .solve(&q.wrench, &WarmStart::default())
-                    .unwrap()
-                    .clone();
+                let s = solved(&q, &config);
                 assert_eq!(
                     s.status,
                     Status::Infeasible,
@@ -266,11 +273,7 @@ fn a_refused_linear_answer_is_held_by_the_interior_point_method() {
             cones,
             ..Default::default()
         };
-        let s = GraspSolver::new(&q, &config)
-            .unwrap()
-            .solve(&q.wrench, &WarmStart::default())
-            .unwrap()
-            .clone();
+        let s = solved(&q, &config);
         let at = format!("{cones:?} at N = {sides}");
         assert_eq!(s.status, Status::Optimal, "{at}: {:?}", s.reason);
         if sides == 8 && cones == grasp_torque::Cones::Linear {
