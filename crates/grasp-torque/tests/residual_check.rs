@@ -249,9 +249,9 @@ fn each_check_ratio_is_the_check_decision() {
 /// tolerance on rows normalised in y and 3.1e4 times the core's bound, and was
 /// refused (`numerical_failure`). The core now asks for the backend's fallback, the
 /// interior-point method on the same polyhedra, and checks it: it holds the grasp at
-/// the exported QP's optimum (7.41535882931192 by cvxpy with Clarabel on `export-qp
-/// --sides 8`, whose point misses the rows by 3e-13), and more sides give a σ no
-/// higher, down to the exact cones'.
+/// the exported QP's optimum (7.41535882931192 by cvxpy with Clarabel,
+/// `scripts/oracle_qp.py FILE --sides 8`, whose point misses the rows by 3e-13), and
+/// more sides give a σ no higher, down to the exact cones'.
 #[test]
 fn a_refused_linear_answer_is_held_by_the_interior_point_method() {
     let path = concat!(
