@@ -32,6 +32,6 @@ pub use qp::{
     RowFactors, RowId, TorqueQp,
 };
 pub use solver::{
-    solve, solve_into, solve_into_with, Capabilities, Check, Diagnostics, Reason, Solution, Status,
-    TorqueSolver, WarmStart, WarmStartError,
+    complete_deferred, solve, solve_into, solve_into_with, Capabilities, Check, Diagnostics,
+    Reason, Solution, Status, TorqueSolver, WarmStart, WarmStartError,
 };

@@ -609,39 +609,7 @@ pub fn solve_into_with(
     if !(lazy && qp.complete_lazy(tol, out)) {
         qp.complete(wrench, tol, solver.name(), out);
     }
-    // An answer the backend called optimal and the check refused: the backend's
-    // fallback, if it has one, checked in full likewise. Where that gives no answer
-    // either, the first refusal is the report (its figures say what failed). (The
-    // copy is made only here, after a refusal.)
-    if out.status == Status::NumericalFailure
-        && matches!(out.reason, Some(Reason::ResidualCheck { .. }))
-    {
-        let first = out.clone();
-        if backend_solve(solver, wrench, warm, true, out) {
-            out.warnings.clear();
-            out.reason = None;
-            out.multipliers.clear();
-            out.solve_time = start.map_or(Duration::ZERO, |t| t.elapsed());
-            let qp = solver.problem();
-            qp.complete(wrench, tol, solver.name(), out);
-            let method = out.method.unwrap_or("another method");
-            let note = if out.status.has_answer() {
-                out.iterations += first.iterations;
-                format!(
-                    "{}'s first answer failed the residual check; this one is its fallback's ({method})",
-                    solver.name()
-                )
-            } else {
-                let status = out.status;
-                *out = first;
-                format!(
-                    "{}'s fallback ({method}) gave no answer either ({status})",
-                    solver.name()
-                )
-            };
-            out.warnings.push(note);
-        }
-    }
+    fall_back_after_refusal(solver, wrench, warm, start, out);
     let qp = solver.problem();
     if let Some(a) = &qp.model.actuators {
         if out.status == Status::Infeasible && a.unactuated_directions.nrows() > 0 {
@@ -654,6 +622,64 @@ pub fn solve_into_with(
         }
     }
     Ok(())
+}
+
+/// Completes an answer whose check [`Check::Lazy`] deferred, as [`solve_into_with`]
+/// with [`Check::Full`] would have: the core's residual check, then, where it refuses
+/// the answer, the backend's fallback checked likewise. `wrench` is the one solved for.
+pub fn complete_deferred(solver: &mut dyn TorqueSolver, wrench: &[f64; 6], out: &mut Solution) {
+    if !out.diagnostics.deferred {
+        return;
+    }
+    let tol = solver.residual_tolerance();
+    solver.problem().complete(wrench, tol, solver.name(), out);
+    fall_back_after_refusal(solver, wrench, &WarmStart::default(), None, out);
+}
+
+/// An answer the backend called optimal and the check refused: the backend's
+/// fallback, if it has one, checked in full likewise. Where that gives no answer
+/// either, the first refusal is the report (its figures say what failed). (The copy
+/// is made only here, after a refusal.) `start`: the solve's clock, if timed.
+fn fall_back_after_refusal(
+    solver: &mut dyn TorqueSolver,
+    wrench: &[f64; 6],
+    warm: &WarmStart<'_>,
+    start: Option<Instant>,
+    out: &mut Solution,
+) {
+    if out.status != Status::NumericalFailure
+        || !matches!(out.reason, Some(Reason::ResidualCheck { .. }))
+    {
+        return;
+    }
+    let first = out.clone();
+    if !backend_solve(solver, wrench, warm, true, out) {
+        return;
+    }
+    out.warnings.clear();
+    out.reason = None;
+    out.multipliers.clear();
+    if let Some(t) = start {
+        out.solve_time = t.elapsed();
+    }
+    let tol = solver.residual_tolerance();
+    solver.problem().complete(wrench, tol, solver.name(), out);
+    let method = out.method.unwrap_or("another method");
+    let note = if out.status.has_answer() {
+        out.iterations += first.iterations;
+        format!(
+            "{}'s first answer failed the residual check; this one is its fallback's ({method})",
+            solver.name()
+        )
+    } else {
+        let status = out.status;
+        *out = first;
+        format!(
+            "{}'s fallback ({method}) gave no answer either ({status})",
+            solver.name()
+        )
+    };
+    out.warnings.push(note);
 }
 
 /// The backend's solve ([`TorqueSolver::solve_raw`], or with `fallback` its

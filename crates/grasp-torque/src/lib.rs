@@ -144,18 +144,15 @@ impl GraspSolver {
         s
     }
 
-    /// Completes what [`Check::Lazy`] deferred for the last solution: the contact forces,
-    /// the residuals and margins, and the core's independent residual check, which may
-    /// still turn the answer into a numerical failure (the next `resolve` then starts
-    /// cold). Nothing changes after a full check.
+    /// Completes what [`Check::Lazy`] deferred for the last solution, as [`Check::Full`]
+    /// would have ([`complete_deferred`]): the contact forces, the residuals and margins,
+    /// and the core's independent residual check, whose refusal sends the wrench to the
+    /// backend's fallback; the answer may still become a numerical failure (the next
+    /// `resolve` then starts cold). Nothing changes after a full check.
     pub fn diagnose(&mut self) -> &Solution {
         let s = &mut self.solutions[self.last];
-        if s.diagnostics.deferred {
-            let b = &self.backend;
-            let (tol, name) = (b.residual_tolerance(), b.name());
-            b.problem().complete(&self.wrench, tol, name, s);
-            self.has_last &= s.is_optimal();
-        }
+        complete_deferred(self.backend.as_mut(), &self.wrench, s);
+        self.has_last &= s.is_optimal();
         &self.solutions[self.last]
     }
 

@@ -226,6 +226,67 @@ fn diagnose_catches_an_answer_whose_certificate_lied() {
     }
 }
 
+/// `diagnose` completes a deferred answer as the full check would have: a refusal goes
+/// to the backend's fallback, whose answer replaces the first only where it passes.
+#[test]
+fn diagnose_sends_a_refused_answer_to_the_fallback() {
+    let config = SolverConfig::default();
+    let lied: fn(&mut Solution) = |s| {
+        if let Some(j) =
+            (0..s.torque.len()).max_by(|&a, &b| s.torque[a].abs().total_cmp(&s.torque[b].abs()))
+        {
+            s.torque[j] *= 1.1;
+        }
+    };
+    let nan: fn(&mut Solution) = |s| s.torque[0] = f64::NAN;
+    let keep: fn(&mut Solution) = |_| {};
+    for (label, p) in problems().into_iter().filter(|(_, p)| solvable(p)) {
+        let mut full = GraspSolver::new(&p, &config).unwrap();
+        let want = full
+            .solve(&p.wrench, &WarmStart::default())
+            .unwrap()
+            .clone();
+        if want.torque.iter().all(|&t| t == 0.0) {
+            continue;
+        }
+        for (fallback, passes) in [(keep, true), (nan, false)] {
+            let inner = config.build(config.qp(&p).unwrap()).unwrap();
+            let mut s = GraspSolver::from_backend(Box::new(Tampered {
+                inner,
+                change: lied,
+                fallback: Some(fallback),
+            }))
+            .with_check(Check::Lazy);
+            let a = s.resolve(&p.wrench).unwrap();
+            assert!(a.diagnostics.deferred, "{label}");
+            let d = s.diagnose().clone();
+            assert!(!d.diagnostics.deferred, "{label}");
+            let said = |what: &str| d.warnings.iter().any(|w| w.contains(what));
+            if passes {
+                assert_eq!(d.status, Status::Optimal, "{label}: {:?}", d.reason);
+                assert!(
+                    said("this one is its fallback's"),
+                    "{label}: {:?}",
+                    d.warnings
+                );
+                assert_eq!(d.torque, want.torque, "{label}");
+                assert_eq!(d.contact_forces, want.contact_forces, "{label}");
+            } else {
+                assert_eq!(d.status, Status::NumericalFailure, "{label}");
+                assert!(said("gave no answer either"), "{label}: {:?}", d.warnings);
+            }
+            // A full answer is left as it is.
+            let again = s.diagnose();
+            assert_eq!(
+                (again.status, &again.torque),
+                (d.status, &d.torque),
+                "{label}"
+            );
+            assert_eq!(again.warnings, d.warnings, "{label}");
+        }
+    }
+}
+
 #[cfg(feature = "clarabel")]
 #[test]
 fn backends_that_do_not_certify_their_rows_get_the_full_check() {

@@ -14,7 +14,7 @@ use grasp_testkit::{rescale, synthetic_grasp, Rng, SynthSpec};
 use grasp_torque::matrix::{norm_inf, Matrix};
 use grasp_torque::problem::Transmission;
 use grasp_torque::{
-    Backend, Cones, ContactModel, GraspProblem, GraspSolver, SolverConfig, Status, WarmStart,
+    Backend, Check, Cones, ContactModel, GraspProblem, GraspSolver, SolverConfig, Status, WarmStart,
 };
 
 mod common;
@@ -936,4 +936,27 @@ fn an_answer_the_check_refuses_is_solved_again_by_the_fallback() {
         "{:?}",
         s.warnings
     );
+    // A control loop with the lazy check: `diagnose` ends where the full check does.
+    let mut lazy = GraspSolver::new(&p, &config)
+        .unwrap()
+        .with_check(Check::Lazy);
+    for w in [p.wrench, near, p.wrench] {
+        let deferred = lazy.resolve(&w).unwrap().diagnostics.deferred;
+        let d = lazy.diagnose();
+        assert_eq!(d.status, Status::Optimal, "{:?}", d.reason);
+        if w == p.wrench {
+            assert!(
+                rel(d.objective, sigma) <= 1e-9,
+                "σ {} against {sigma}",
+                d.objective
+            );
+            if deferred {
+                assert!(
+                    d.warnings.iter().any(|w| w.contains("fallback")),
+                    "{:?}",
+                    d.warnings
+                );
+            }
+        }
+    }
 }
