@@ -187,6 +187,18 @@ pub const CAPABILITIES: Capabilities = Capabilities {
 /// normalised coordinates; the residuals of `G f = w` are at rounding level.
 pub const RESIDUAL_TOLERANCE: f64 = 1e-8;
 
+/// The largest bound on σ's excess over the optimum, relative, at which an
+/// interior-point answer that fails its certificate only on the gap, or stopped short
+/// with a gap that bounds σ no closer, is `almost_optimal` ([`Certificate::almost`]).
+pub(crate) const ALMOST_EXCESS: f64 = 1e-6;
+
+/// The warning of an `almost_optimal` answer: `what`'s bound on σ's excess.
+pub(crate) fn almost_warning(what: &str, excess: f64) -> String {
+    format!(
+        "{what}'s certificate bounds σ only to {excess:.1e} above the optimum, relative (its gap; optimal answers are within 2e-9)"
+    )
+}
+
 /// Marker for the elastic bound `s ≥ 0` in the key set.
 const S_ROW: usize = usize::MAX;
 
@@ -818,10 +830,20 @@ impl TorqueSolver for ActiveSetSolver {
             CERTIFICATE_TOLERANCE,
             &mut f.scratch,
         );
-        if !c.passed {
+        // An iterate the method stopped short at is `optimal` only where the gap alone
+        // bounds σ (as the exact cones' best iterate, `ExactSolver::finish_from_best`).
+        let stopped = !matches!(end, ipm::IpmEnd::Converged);
+        out.status = if c.passed && (!stopped || c.bounds_sigma(CERTIFICATE_TOLERANCE)) {
+            Status::Optimal
+        } else if c.almost(CERTIFICATE_TOLERANCE, ALMOST_EXCESS)
+            && f.ipm.x[..nx].iter().all(|v| v.is_finite())
+        {
+            out.warnings
+                .push(almost_warning("the interior-point answer", c.excess));
+            Status::AlmostOptimal
+        } else {
             return false;
-        }
-        out.status = Status::Optimal;
+        };
         out.reason = None;
         out.active_set = None;
         out.iterations = f.ipm.iterations;

@@ -1091,3 +1091,19 @@ pub struct Certificate {
     /// Whether every measure is within the tolerance.
     pub passed: bool,
 }
+
+impl Certificate {
+    /// Whether the gap alone bounds σ within `2 tol` of the optimum (`|sᵀz| ≤ tol
+    /// xᵀPx`), without the rounding of sᵀz's terms that [`Self::passed`] also admits.
+    /// That allowance is for an iterate whose method converged on its own, stricter,
+    /// measures; an iterate it stopped short at has only this bound.
+    pub fn bounds_sigma(&self, tol: f64) -> bool {
+        self.excess <= 2.0 * tol
+    }
+
+    /// Whether the point is feasible and stationary within `tol` and the gap bounds σ
+    /// within `excess` of the optimum, relative: an answer of reduced accuracy.
+    pub fn almost(&self, tol: f64, excess: f64) -> bool {
+        self.primal <= tol && self.dual <= tol && self.stationarity <= tol && self.excess <= excess
+    }
+}

@@ -653,12 +653,13 @@ fn fall_back_after_refusal(
         return;
     }
     let first = out.clone();
-    if !backend_solve(solver, wrench, warm, true, out) {
-        return;
-    }
     out.warnings.clear();
     out.reason = None;
     out.multipliers.clear();
+    if !backend_solve(solver, wrench, warm, true, out) {
+        *out = first;
+        return;
+    }
     if let Some(t) = start {
         out.solve_time = t.elapsed();
     }

@@ -296,3 +296,53 @@ fn a_refused_linear_answer_is_held_by_the_interior_point_method() {
         last = s.objective;
     }
 }
+
+/// The bound on σ's excess an answer states: 2e-9 when `optimal`, its warning's when
+/// `almost_optimal`.
+fn stated_excess(s: &Solution) -> f64 {
+    match s.status {
+        Status::Optimal => 2e-9,
+        Status::AlmostOptimal => s
+            .warnings
+            .iter()
+            .find_map(|w| w.split("certificate bounds σ only to ").nth(1))
+            .and_then(|w| w.split(' ').next()?.parse().ok())
+            .expect("the bound in a warning"),
+        _ => panic!("no answer: {:?}", s.reason),
+    }
+}
+
+/// On a grasp where the interior-point fallback stops short of its own tolerances at
+/// every N, each answer states a bound on σ that holds: nested polyhedra (N's vertices
+/// are among 2N's) give σ*(M) ≤ σ*(N) ≤ σ(N) for M > N, so σ(M) ≤ σ(N) (1 + b_M). At
+/// N = 16 a best iterate whose gap bounds σ only to 3.3e-7, admitted by the
+/// allowance for sᵀz's rounding, was `optimal` 1.8e-7 above the answer at N = 8.
+#[test]
+fn an_iterate_stopped_short_states_the_bound_its_gap_gives() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/fuzz/noisy-paper-grasp-stopped-short.json"
+    );
+    let p = grasp_torque::load_problem(path).unwrap();
+    let answers: Vec<(usize, Solution)> = [4, 8, 16, 32, 64]
+        .into_iter()
+        .map(|sides| {
+            let mut q = p.clone();
+            q.linearization.sides = sides;
+            (sides, solved(&q, &SolverConfig::default()))
+        })
+        .collect();
+    for (i, (n, a)) in answers.iter().enumerate() {
+        let bound = stated_excess(a);
+        assert!(bound <= 1e-6, "N = {n}: {:?}", a.warnings);
+        for (m, b) in &answers[i + 1..] {
+            assert!(
+                b.objective <= a.objective * (1.0 + stated_excess(b)),
+                "σ {} at N = {m} above σ {} at N = {n} by more than its bound ({:?})",
+                b.objective,
+                a.objective,
+                b.warnings
+            );
+        }
+    }
+}
