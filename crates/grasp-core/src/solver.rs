@@ -609,7 +609,9 @@ pub fn solve_into_with(
     if !(lazy && qp.complete_lazy(tol, out)) {
         qp.complete(wrench, tol, solver.name(), out);
     }
-    fall_back_after_refusal(solver, wrench, warm, start, out);
+    if refused(out) {
+        fall_back_after_refusal(solver, wrench, warm, start, out);
+    }
     let qp = solver.problem();
     if let Some(a) = &qp.model.actuators {
         if out.status == Status::Infeasible && a.unactuated_directions.nrows() > 0 {
@@ -633,13 +635,22 @@ pub fn complete_deferred(solver: &mut dyn TorqueSolver, wrench: &[f64; 6], out: 
     }
     let tol = solver.residual_tolerance();
     solver.problem().complete(wrench, tol, solver.name(), out);
-    fall_back_after_refusal(solver, wrench, &WarmStart::default(), None, out);
+    if refused(out) {
+        fall_back_after_refusal(solver, wrench, &WarmStart::default(), None, out);
+    }
 }
 
-/// An answer the backend called optimal and the check refused: the backend's
-/// fallback, if it has one, checked in full likewise. Where that gives no answer
-/// either, the first refusal is the report (its figures say what failed). (The copy
-/// is made only here, after a refusal.) `start`: the solve's clock, if timed.
+/// Whether the core's check refused an answer the backend called optimal.
+fn refused(out: &Solution) -> bool {
+    out.status == Status::NumericalFailure
+        && matches!(out.reason, Some(Reason::ResidualCheck { .. }))
+}
+
+/// An answer the backend called optimal and the check refused ([`refused`]): the
+/// backend's fallback, if it has one, checked in full likewise. Where that gives no
+/// answer either, the first refusal is the report (its figures say what failed). (The
+/// copy is made only here, after a refusal.) `start`: the solve's clock, if timed.
+#[cold]
 fn fall_back_after_refusal(
     solver: &mut dyn TorqueSolver,
     wrench: &[f64; 6],
@@ -647,11 +658,6 @@ fn fall_back_after_refusal(
     start: Option<Instant>,
     out: &mut Solution,
 ) {
-    if out.status != Status::NumericalFailure
-        || !matches!(out.reason, Some(Reason::ResidualCheck { .. }))
-    {
-        return;
-    }
     let first = out.clone();
     out.warnings.clear();
     out.reason = None;
