@@ -128,16 +128,57 @@ fn solvable(p: &GraspProblem) -> bool {
         .is_optimal()
 }
 
+/// The answer moved along the joint with the largest torque by a tenth of it: a row
+/// the optimum holds must now fail (as in tests/residual_check.rs), while the backend
+/// still calls it optimal.
+fn lie(s: &mut Solution) {
+    if let Some(j) =
+        (0..s.torque.len()).max_by(|&a, &b| s.torque[a].abs().total_cmp(&s.torque[b].abs()))
+    {
+        s.torque[j] *= 1.1;
+    }
+}
+
 fn tampered(p: &GraspProblem, change: fn(&mut Solution)) -> GraspSolver {
+    with_fallback(p, change, None).with_check(Check::Lazy)
+}
+
+/// The default solver's backend, its answers changed by `change`, with `fallback`.
+fn with_fallback(
+    p: &GraspProblem,
+    change: fn(&mut Solution),
+    fallback: Option<fn(&mut Solution)>,
+) -> GraspSolver {
     let config = SolverConfig::default();
     let inner = config.build(config.qp(p).unwrap()).unwrap();
     assert!(inner.capabilities().certifies_rows);
     GraspSolver::from_backend(Box::new(Tampered {
         inner,
         change,
-        fallback: None,
+        fallback,
     }))
-    .with_check(Check::Lazy)
+}
+
+/// A refused answer's report: the fallback's answer where it `passes`, with a warning
+/// that says so, else the first refusal's, with one that says the fallback failed.
+fn assert_fell_back(label: &str, s: &Solution, passes: bool) {
+    let said = |what: &str| s.warnings.iter().any(|w| w.contains(what));
+    if passes {
+        assert_eq!(s.status, Status::Optimal, "{label}: {:?}", s.reason);
+        assert!(
+            said("this one is its fallback's"),
+            "{label}: {:?}",
+            s.warnings
+        );
+    } else {
+        assert_eq!(s.status, Status::NumericalFailure, "{label}");
+        assert!(
+            matches!(s.reason, Some(Reason::ResidualCheck { .. })),
+            "{label}: {:?}",
+            s.reason
+        );
+        assert!(said("gave no answer either"), "{label}: {:?}", s.warnings);
+    }
 }
 
 /// An answer the check refuses goes to the backend's fallback, checked in full: its
@@ -145,35 +186,13 @@ fn tampered(p: &GraspProblem, change: fn(&mut Solution)) -> GraspSolver {
 /// report.
 #[test]
 fn a_refused_answer_goes_to_the_fallback_and_only_a_passing_one_replaces_it() {
-    let config = SolverConfig::default();
     for (label, p) in problems().into_iter().filter(|(_, p)| solvable(p)) {
         let nan: fn(&mut Solution) = |s| s.torque[0] = f64::NAN;
         let keep: fn(&mut Solution) = |_| {};
         for (fallback, passes) in [(keep, true), (nan, false)] {
-            let inner = config.build(config.qp(&p).unwrap()).unwrap();
-            let mut s = GraspSolver::from_backend(Box::new(Tampered {
-                inner,
-                change: nan,
-                fallback: Some(fallback),
-            }));
+            let mut s = with_fallback(&p, nan, Some(fallback));
             let a = s.solve(&p.wrench, &WarmStart::default()).unwrap();
-            let said = |what: &str| a.warnings.iter().any(|w| w.contains(what));
-            if passes {
-                assert_eq!(a.status, Status::Optimal, "{label}: {:?}", a.reason);
-                assert!(
-                    said("this one is its fallback's"),
-                    "{label}: {:?}",
-                    a.warnings
-                );
-            } else {
-                assert_eq!(a.status, Status::NumericalFailure, "{label}");
-                assert!(
-                    matches!(a.reason, Some(Reason::ResidualCheck { .. })),
-                    "{label}: {:?}",
-                    a.reason
-                );
-                assert!(said("gave no answer either"), "{label}: {:?}", a.warnings);
-            }
+            assert_fell_back(&label, a, passes);
         }
     }
 }
@@ -202,15 +221,7 @@ fn a_lazy_check_never_calls_a_non_finite_answer_optimal() {
 #[test]
 fn diagnose_catches_an_answer_whose_certificate_lied() {
     for (label, p) in problems().into_iter().filter(|(_, p)| solvable(p)) {
-        // Moved along the joint with the largest torque by a tenth of it: a row the
-        // optimum holds must now fail (as in tests/residual_check.rs).
-        let mut s = tampered(&p, |s| {
-            if let Some(j) =
-                (0..s.torque.len()).max_by(|&a, &b| s.torque[a].abs().total_cmp(&s.torque[b].abs()))
-            {
-                s.torque[j] *= 1.1;
-            }
-        });
+        let mut s = tampered(&p, lie);
         let a = s.solve(&p.wrench, &WarmStart::default()).unwrap();
         if a.torque.iter().all(|&t| t == 0.0) {
             continue;
@@ -230,18 +241,10 @@ fn diagnose_catches_an_answer_whose_certificate_lied() {
 /// to the backend's fallback, whose answer replaces the first only where it passes.
 #[test]
 fn diagnose_sends_a_refused_answer_to_the_fallback() {
-    let config = SolverConfig::default();
-    let lied: fn(&mut Solution) = |s| {
-        if let Some(j) =
-            (0..s.torque.len()).max_by(|&a, &b| s.torque[a].abs().total_cmp(&s.torque[b].abs()))
-        {
-            s.torque[j] *= 1.1;
-        }
-    };
     let nan: fn(&mut Solution) = |s| s.torque[0] = f64::NAN;
     let keep: fn(&mut Solution) = |_| {};
     for (label, p) in problems().into_iter().filter(|(_, p)| solvable(p)) {
-        let mut full = GraspSolver::new(&p, &config).unwrap();
+        let mut full = GraspSolver::new(&p, &SolverConfig::default()).unwrap();
         let want = full
             .solve(&p.wrench, &WarmStart::default())
             .unwrap()
@@ -250,30 +253,17 @@ fn diagnose_sends_a_refused_answer_to_the_fallback() {
             continue;
         }
         for (fallback, passes) in [(keep, true), (nan, false)] {
-            let inner = config.build(config.qp(&p).unwrap()).unwrap();
-            let mut s = GraspSolver::from_backend(Box::new(Tampered {
-                inner,
-                change: lied,
-                fallback: Some(fallback),
-            }))
-            .with_check(Check::Lazy);
-            let a = s.resolve(&p.wrench).unwrap();
-            assert!(a.diagnostics.deferred, "{label}");
+            let mut s = with_fallback(&p, lie, Some(fallback)).with_check(Check::Lazy);
+            assert!(
+                s.resolve(&p.wrench).unwrap().diagnostics.deferred,
+                "{label}"
+            );
             let d = s.diagnose().clone();
             assert!(!d.diagnostics.deferred, "{label}");
-            let said = |what: &str| d.warnings.iter().any(|w| w.contains(what));
+            assert_fell_back(&label, &d, passes);
             if passes {
-                assert_eq!(d.status, Status::Optimal, "{label}: {:?}", d.reason);
-                assert!(
-                    said("this one is its fallback's"),
-                    "{label}: {:?}",
-                    d.warnings
-                );
                 assert_eq!(d.torque, want.torque, "{label}");
                 assert_eq!(d.contact_forces, want.contact_forces, "{label}");
-            } else {
-                assert_eq!(d.status, Status::NumericalFailure, "{label}");
-                assert!(said("gave no answer either"), "{label}: {:?}", d.warnings);
             }
             // A full answer is left as it is.
             let again = s.diagnose();

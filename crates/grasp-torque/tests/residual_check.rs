@@ -20,6 +20,12 @@ fn solved(q: &GraspProblem, config: &SolverConfig) -> Solution {
         .clone()
 }
 
+/// A problem of `fixtures/fuzz`.
+fn fuzz_fixture(name: &str) -> GraspProblem {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/fuzz");
+    grasp_torque::load_problem(format!("{dir}/{name}.json")).unwrap()
+}
+
 fn residual(m: &Matrix, x: &[f64], t: &[f64]) -> (f64, f64) {
     (0..m.nrows()).fold((0.0f64, 0.0f64), |(r, s), i| {
         let row = m.row(i);
@@ -254,11 +260,7 @@ fn each_check_ratio_is_the_check_decision() {
 /// more sides give a σ no higher, down to the exact cones'.
 #[test]
 fn a_refused_linear_answer_is_held_by_the_interior_point_method() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../fixtures/fuzz/scaled-row-refused-then-held.json"
-    );
-    let p = grasp_torque::load_problem(path).unwrap();
+    let p = fuzz_fixture("scaled-row-refused-then-held");
     let mut last = f64::INFINITY;
     for (sides, cones) in [
         (4, grasp_torque::Cones::Linear),
@@ -319,11 +321,7 @@ fn stated_excess(s: &Solution) -> f64 {
 /// allowance for sᵀz's rounding, was `optimal` 1.8e-7 above the answer at N = 8.
 #[test]
 fn an_iterate_stopped_short_states_the_bound_its_gap_gives() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../fixtures/fuzz/noisy-paper-grasp-stopped-short.json"
-    );
-    let p = grasp_torque::load_problem(path).unwrap();
+    let p = fuzz_fixture("noisy-paper-grasp-stopped-short");
     let answers: Vec<(usize, Solution)> = [4, 8, 16, 32, 64]
         .into_iter()
         .map(|sides| {
