@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import grasp_torque as gt
-from conftest import fixture_files, reference_cases
+from conftest import ROOT, fixture_files, reference_cases
 
 
 def cli_solve(cli, path, *flags):
@@ -215,3 +215,19 @@ def test_the_readmes_python_block_runs(root, monkeypatch):
     exec(compile(block, "README.md (Python)", "exec"), scope)
     assert scope["r"].status == "optimal" and (scope["out"].status == 0).all()
     assert scope["a"].G.shape == (10_000, 6, 9) and not scope["a"].errors
+
+
+def test_diagnose_falls_back_where_the_full_check_does():
+    # Newton's answer on this grasp passes its certificate and the core's check refuses
+    # it; the full check then takes the interior-point fallback's. Under the lazy
+    # check, `diagnose` must end at the same answer.
+    path = ROOT / "fixtures" / "fuzz" / "cancelled-forces-off-the-cone.json"
+    full = gt.Solver(path, cones="exact").solve()
+    lazy = gt.Solver(path, cones="exact", check="lazy")
+    first = lazy.solve()
+    assert full.status == first.status == "optimal"
+    c = lazy.diagnose()
+    assert c.status == "optimal" and not c.diagnostics["deferred"]
+    assert rel_close(c.objective, full.objective, 1e-9)
+    if first.diagnostics["deferred"]:
+        assert any("fallback" in w for w in c.warnings)
