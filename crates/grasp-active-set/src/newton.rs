@@ -676,10 +676,118 @@ impl Newton {
                 self.frozen = None;
                 continue;
             }
+            // Stopped on a multiplier that only its apex's rebalancing put right (an
+            // SFCl pair held at its apex by a limit's row): the same guess again, from
+            // the multipliers as they now are.
+            if end == Step::Negative {
+                self.frozen = None;
+                continue;
+            }
             if end != Step::Converged {
                 return false;
             }
             self.finish(form);
+            return true;
+        }
+        false
+    }
+
+    /// [`Self::rebalance_apex`] for an SFCl pair at the apex together: its rows are the
+    /// first cone's (`a`, head and shared tail) and the second's head, their dual
+    /// `ν_a, ν_b ≥ 0`, `‖ν_t‖ ≤ ν_a + ν_b` ([`Self::apex_dual`]). An active row in the
+    /// span of those rows passes its multiplier to them as for one cone; the δ nearest
+    /// 0 that puts the pair's dual in its cone is taken. (A torque limit that holds an
+    /// unloaded SFCl finger at zero: without it, both cones left the apex and came back
+    /// until the guesses ran out, and the interior-point method stopped short with σ
+    /// 6.0e-8 above Clarabel's, `fuzz_answers.py` seed 4830.)
+    fn rebalance_pair(&mut self, a: usize, b: usize) -> bool {
+        let ((start, dim), head_b) = (self.socs[a], self.socs[b].0);
+        let rows = dim + 1;
+        let row = |i: usize| if i < dim { start + i } else { head_b };
+        let amat = &self.a_red;
+        let largest = (0..rows).fold(0.0f64, |m, i| m.max(norm_inf(amat.row(row(i)))));
+        if (0..rows).any(|i| norm_inf(amat.row(row(i))) <= PINNED_ROW * largest) {
+            return false;
+        }
+        let mut gram = [0.0; crate::ipm::SOC_MAX * crate::ipm::SOC_MAX];
+        let gram = &mut gram[..rows * rows];
+        for i in 0..rows {
+            for j in 0..rows {
+                gram[i * rows + j] = dot4(amat.row(row(i)), amat.row(row(j)));
+            }
+        }
+        if !cholesky(gram, rows) {
+            return false;
+        }
+        let n = self.n;
+        for r in self.orth.0..self.orth.1 {
+            if !self.active[r] || self.nu_row[r] < 0.0 {
+                continue;
+            }
+            let ar = amat.row(r);
+            let mut gamma = [0.0; crate::ipm::SOC_MAX];
+            let gamma = &mut gamma[..rows];
+            for (i, g) in gamma.iter_mut().enumerate() {
+                *g = dot4(amat.row(row(i)), ar);
+            }
+            forward(gram, rows, gamma);
+            backward(gram, rows, gamma);
+            let off = (0..n).fold(0.0f64, |m, c| {
+                let v: f64 = (0..rows).map(|i| gamma[i] * amat[(row(i), c)]).sum();
+                m.max((v - ar[c]).abs())
+            });
+            if off.is_nan() || off > PINNED_ROW * norm_inf(ar) {
+                continue;
+            }
+            let (ha, hb, t) = (
+                self.nu_row[start],
+                self.nu_row[head_b],
+                &self.nu_row[start + 1..start + dim],
+            );
+            let (qa, qb, g) = (gamma[0], gamma[dim], &gamma[1..dim]);
+            let (h, q) = (ha + hb, qa + qb);
+            let dotp = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(x, y)| x * y).sum::<f64>();
+            let tail = |d: f64| {
+                t.iter()
+                    .zip(g)
+                    .map(|(x, y)| (x - d * y).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            };
+            let size = |d: f64| h.abs() + soc_norm(t) + d.abs() * (q.abs() + soc_norm(g));
+            let holds = |d: f64| {
+                let tol = 1e-12 * size(d);
+                ha - d * qa >= -tol && hb - d * qb >= -tol && tail(d) - (h - d * q) <= tol
+            };
+            // The dual cone's boundary (‖t − δg‖ = h − δq) and each head's zero.
+            let (c2, c1, c0) = (
+                dotp(g, g) - q * q,
+                -2.0 * (dotp(t, g) - h * q),
+                dotp(t, t) - h * h,
+            );
+            let disc = c1 * c1 - 4.0 * c2 * c0;
+            let mut candidates = [f64::NAN; 4];
+            if c2.abs() > 1e-12 * (dotp(g, g) + q * q) && disc >= 0.0 {
+                let sq = disc.sqrt();
+                candidates[0] = (-c1 - sq) / (2.0 * c2);
+                candidates[1] = (-c1 + sq) / (2.0 * c2);
+            } else if c1 != 0.0 {
+                candidates[0] = -c0 / c1;
+            }
+            candidates[2] = ha / qa;
+            candidates[3] = hb / qb;
+            let lowest = -self.nu_row[r];
+            let Some(d) = candidates
+                .into_iter()
+                .filter(|&d| d.is_finite() && d >= lowest && holds(d))
+                .min_by(|x, y| x.abs().total_cmp(&y.abs()))
+            else {
+                continue;
+            };
+            self.nu_row[r] += d;
+            for (i, gi) in gamma.iter().enumerate() {
+                self.nu_row[row(i)] -= d * gi;
+            }
             return true;
         }
         false
@@ -1095,8 +1203,8 @@ impl Newton {
     /// until its guesses ran out, and the interior-point method, with no strictly
     /// feasible point, grew the limit's multiplier to 1e12 (fuzz_answers.py seed 230).
     fn rebalance_apex(&mut self, k: usize) -> bool {
-        if self.pair[k].is_some_and(|j| self.piece[j] == Piece::Apex) {
-            return false;
+        if let Some(j) = self.pair[k].filter(|&j| self.piece[j] == Piece::Apex) {
+            return self.rebalance_pair(k.min(j), k.max(j));
         }
         let (start, dim) = self.socs[k];
         let n = self.n;

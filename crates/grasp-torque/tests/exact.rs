@@ -522,6 +522,32 @@ fn the_gap_bounds_sigma_whatever_the_multipliers() {
     }
 }
 
+/// An SFCl finger that torque limits at zero hold unloaded (`fixtures/fuzz/
+/// sfcl-finger-held-unloaded-by-limits.json`, fuzz seed 4830): both cones of its pair
+/// are at the apex, and their shared dual lies in its cone only with a limit's
+/// multiplier moved into it (`Newton::rebalance_pair`). Without that, Newton's guesses
+/// cycled and the interior-point method stopped short, 6.0e-8 above σ*. Newton now
+/// certifies it, σ* to 1e-9 (the direct SOCP's, which Clarabel's exact answer matches
+/// to 1e-11), in four systems of units.
+#[test]
+fn an_sfcl_pair_held_at_its_apex_by_limits_is_newtons() {
+    const ORACLE: f64 = 1.6348449612028e-4;
+    let p = fixture("fuzz/sfcl-finger-held-unloaded-by-limits");
+    for (l, f) in [(1.0, 1.0), (1.1, 20.5), (1e-3, 1e3), (1e2, 1e-2)] {
+        let q = grasp_testkit::rescale(&p, l, f);
+        let back = (l * f) * (l * f);
+        let at = format!("lengths × {l:e}, forces × {f:e}");
+        let s = run(&q, Backend::ActiveSet, Cones::Exact);
+        assert_eq!(s.status, Status::Optimal, "{at}: {:?}", s.reason);
+        assert_eq!(s.method, Some("newton"), "{at}");
+        assert!(
+            rel(s.objective / back, ORACLE) <= 1e-9,
+            "{at}: σ* {} against {ORACLE}",
+            s.objective / back
+        );
+    }
+}
+
 /// A tendon that only pulls (upper limit 0) on a joint whose only load is one contact,
 /// through a direction inside that contact's dual cone: every force in the cone but
 /// zero would push the joint, so every admissible torque leaves the contact unloaded,
@@ -620,33 +646,31 @@ fn a_tendon_that_holds_a_contact_unloaded_is_the_grasp_without_it() {
     assert!(compared >= 100, "{compared}");
 }
 
-/// An interior-point answer whose certificate fails only on the gap, and that bounds
-/// σ within 1e-6 of the optimum, is `almost_optimal`, with the bound in a warning:
-/// `fixtures/fuzz/interior-point-gap.json` (fuzz seed 1030), whose best iterate's
-/// gap, a primal residual of rounding times multipliers of 1e6, is 5e-8 of σ. It was
-/// `optimal` at 5e-9 above σ*, with σ spread by 1.5e-8 over five unit systems. The
-/// answer must hold the bound it states, and no point below σ* may pass.
+/// `fixtures/fuzz/interior-point-gap.json` (fuzz seed 1030): the exact solve ended with
+/// the interior-point method, whose best iterate's gap, a primal residual of rounding
+/// times multipliers of 1e6, is 5e-8 of σ. It was `optimal` at 5e-9 above σ*, with σ
+/// spread by 1.5e-8 over five unit systems, then `almost_optimal` with that bound
+/// (`ExactSolver::almost`). Newton stopped there on a multiplier that only the apex's
+/// rebalancing put right, and gave up; it now runs the same guess again from the
+/// rebalanced multipliers, and certifies σ* to 1e-9 in four systems of units.
 #[test]
-fn an_answer_its_gap_bounds_only_loosely_is_almost_optimal() {
+fn a_guess_whose_multipliers_the_apex_put_right_is_solved_again() {
     const ORACLE: f64 = 1.450032515658e-1;
     let p = fixture("fuzz/interior-point-gap");
-    let s = run(&p, Backend::ActiveSet, Cones::Exact);
-    assert_eq!(s.status, Status::AlmostOptimal, "{:?}", s.reason);
-    let bound: f64 = s
-        .warnings
-        .iter()
-        .find_map(|w| w.strip_prefix("the exact-cone answer's certificate bounds σ only to "))
-        .and_then(|w| w.split(' ').next())
-        .and_then(|v| v.parse().ok())
-        .expect("the bound in a warning");
-    assert!(bound > 2e-9 && bound <= 1e-6, "bound {bound:e}");
-    // The oracle's accuracy, 1e-10, on either side.
-    let r = (s.objective - ORACLE) / ORACLE;
-    assert!(
-        r >= -1e-10 && r <= bound + 1e-10,
-        "σ {} against {ORACLE}: {r:e}",
-        s.objective
-    );
+    for (l, f) in [(1.0, 1.0), (1.1, 20.5), (1e-3, 1e3), (1e2, 1e-2)] {
+        let q = grasp_testkit::rescale(&p, l, f);
+        let back = (l * f) * (l * f);
+        let at = format!("lengths × {l:e}, forces × {f:e}");
+        let s = run(&q, Backend::ActiveSet, Cones::Exact);
+        assert_eq!(s.status, Status::Optimal, "{at}: {:?}", s.reason);
+        assert_eq!(s.method, Some("newton"), "{at}");
+        // The oracle's accuracy, 1e-10, and the certificate's 2e-9 on σ.
+        assert!(
+            rel(s.objective / back, ORACLE) <= 1e-9,
+            "{at}: σ {} against {ORACLE}",
+            s.objective / back
+        );
+    }
 }
 
 /// A joint whose row of Jᵀ is a combination of G's, `s cᵀ G` (so that the equalities
