@@ -80,6 +80,51 @@ pub(crate) enum Piece {
     Apex,
 }
 
+/// The span of a few rows of the reduced constraint matrix (a cone's at its apex, for
+/// [`Newton::rebalance_apex`]): the Cholesky factor of their Gram matrix, rows not
+/// `free` standing in as unit rows with coefficient 0.
+struct RowSpan<'a> {
+    rows: &'a [usize],
+    free: &'a [bool],
+    gram: [f64; crate::ipm::SOC_MAX * crate::ipm::SOC_MAX],
+}
+
+impl<'a> RowSpan<'a> {
+    fn new(a: &Matrix, rows: &'a [usize], free: &'a [bool]) -> Option<Self> {
+        let k = rows.len();
+        let mut gram = [0.0; crate::ipm::SOC_MAX * crate::ipm::SOC_MAX];
+        for i in 0..k {
+            for j in 0..k {
+                gram[i * k + j] = match (free[i], free[j]) {
+                    (true, true) => dot4(a.row(rows[i]), a.row(rows[j])),
+                    _ => f64::from(u8::from(i == j)),
+                };
+            }
+        }
+        cholesky(&mut gram[..k * k], k).then_some(Self { rows, free, gram })
+    }
+
+    /// Row r's coefficients in the span, into `gamma`; whether r lies in it (the
+    /// least-squares residual is rounding of the row).
+    fn coefficients(&self, a: &Matrix, r: usize, gamma: &mut [f64]) -> bool {
+        let (k, ar) = (self.rows.len(), a.row(r));
+        for (j, g) in gamma.iter_mut().enumerate() {
+            *g = if self.free[j] {
+                dot4(a.row(self.rows[j]), ar)
+            } else {
+                0.0
+            };
+        }
+        forward(&self.gram[..k * k], k, gamma);
+        backward(&self.gram[..k * k], k, gamma);
+        let off = (0..a.ncols()).fold(0.0f64, |m, c| {
+            let v: f64 = (0..k).map(|j| gamma[j] * a[(self.rows[j], c)]).sum();
+            m.max((v - ar[c]).abs())
+        });
+        !(off.is_nan() || off > PINNED_ROW * norm_inf(ar))
+    }
+}
+
 /// How Newton's method on one guess ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Step {
@@ -709,34 +754,18 @@ impl Newton {
         if (0..rows).any(|i| norm_inf(amat.row(row(i))) <= PINNED_ROW * largest) {
             return false;
         }
-        let mut gram = [0.0; crate::ipm::SOC_MAX * crate::ipm::SOC_MAX];
-        let gram = &mut gram[..rows * rows];
-        for i in 0..rows {
-            for j in 0..rows {
-                gram[i * rows + j] = dot4(amat.row(row(i)), amat.row(row(j)));
-            }
-        }
-        if !cholesky(gram, rows) {
+        let index: [usize; crate::ipm::SOC_MAX] = std::array::from_fn(row);
+        let Some(span) = RowSpan::new(amat, &index[..rows], &[true; crate::ipm::SOC_MAX][..rows])
+        else {
             return false;
-        }
-        let n = self.n;
+        };
         for r in self.orth.0..self.orth.1 {
             if !self.active[r] || self.nu_row[r] < 0.0 {
                 continue;
             }
-            let ar = amat.row(r);
             let mut gamma = [0.0; crate::ipm::SOC_MAX];
             let gamma = &mut gamma[..rows];
-            for (i, g) in gamma.iter_mut().enumerate() {
-                *g = dot4(amat.row(row(i)), ar);
-            }
-            forward(gram, rows, gamma);
-            backward(gram, rows, gamma);
-            let off = (0..n).fold(0.0f64, |m, c| {
-                let v: f64 = (0..rows).map(|i| gamma[i] * amat[(row(i), c)]).sum();
-                m.max((v - ar[c]).abs())
-            });
-            if off.is_nan() || off > PINNED_ROW * norm_inf(ar) {
+            if !span.coefficients(&self.a_red, r, gamma) {
                 continue;
             }
             let (ha, hb, t) = (
@@ -1207,7 +1236,6 @@ impl Newton {
             return self.rebalance_pair(k.min(j), k.max(j));
         }
         let (start, dim) = self.socs[k];
-        let n = self.n;
         // The cone's rows that the equalities leave free.
         let largest = (0..dim).fold(0.0f64, |m, j| m.max(norm_inf(self.a_red.row(start + j))));
         let fixed = |j: usize, a: &Matrix| norm_inf(a.row(start + j)) <= PINNED_ROW * largest;
@@ -1231,43 +1259,19 @@ impl Newton {
         // The Gram matrix of the free rows, and each active row's coefficients in them.
         let free: [bool; crate::ipm::SOC_MAX] =
             std::array::from_fn(|j| j < dim && !fixed(j, &self.a_red));
-        let a = &self.a_red;
-        let mut gram = [0.0; crate::ipm::SOC_MAX * crate::ipm::SOC_MAX];
-        let gram = &mut gram[..dim * dim];
-        for i in 0..dim {
-            for j in 0..dim {
-                gram[i * dim + j] = match (free[i], free[j]) {
-                    (true, true) => dot4(a.row(start + i), a.row(start + j)),
-                    _ => f64::from(u8::from(i == j)),
-                };
-            }
-        }
-        if !cholesky(gram, dim) {
+        let rows: [usize; crate::ipm::SOC_MAX] = std::array::from_fn(|j| start + j);
+        let span = RowSpan::new(&self.a_red, &rows[..dim], &free[..dim]);
+        let Some(span) = span else {
             self.nu_row[start..start + dim].copy_from_slice(&was[..dim]);
             return false;
-        }
+        };
         for r in self.orth.0..self.orth.1 {
             if !self.active[r] || self.nu_row[r] < 0.0 {
                 continue;
             }
-            let ar = a.row(r);
             let mut gamma = [0.0; crate::ipm::SOC_MAX];
             let gamma = &mut gamma[..dim];
-            for (j, g) in gamma.iter_mut().enumerate() {
-                *g = if free[j] {
-                    dot4(a.row(start + j), ar)
-                } else {
-                    0.0
-                };
-            }
-            forward(gram, dim, gamma);
-            backward(gram, dim, gamma);
-            // In the span: the least-squares residual is rounding of the row.
-            let off = (0..n).fold(0.0f64, |m, c| {
-                let v: f64 = (0..dim).map(|j| gamma[j] * a[(start + j, c)]).sum();
-                m.max((v - ar[c]).abs())
-            });
-            if off.is_nan() || off > PINNED_ROW * norm_inf(ar) {
+            if !span.coefficients(&self.a_red, r, gamma) {
                 continue;
             }
             // ‖t − δg‖ = h − δq on the boundary: A δ² + B δ + C = 0.

@@ -532,17 +532,23 @@ fn the_gap_bounds_sigma_whatever_the_multipliers() {
 #[test]
 fn an_sfcl_pair_held_at_its_apex_by_limits_is_newtons() {
     const ORACLE: f64 = 1.6348449612028e-4;
-    let p = fixture("fuzz/sfcl-finger-held-unloaded-by-limits");
+    newtons_in_four_units("fuzz/sfcl-finger-held-unloaded-by-limits", ORACLE);
+}
+
+/// The fixture `name`, in four systems of units: Newton's `optimal`, σ* to 1e-9 of
+/// `oracle` (the oracle's accuracy, 1e-10, and the certificate's 2e-9 on σ).
+fn newtons_in_four_units(name: &str, oracle: f64) {
+    let p = fixture(name);
     for (l, f) in [(1.0, 1.0), (1.1, 20.5), (1e-3, 1e3), (1e2, 1e-2)] {
         let q = grasp_testkit::rescale(&p, l, f);
         let back = (l * f) * (l * f);
-        let at = format!("lengths × {l:e}, forces × {f:e}");
+        let at = format!("{name}, lengths × {l:e}, forces × {f:e}");
         let s = run(&q, Backend::ActiveSet, Cones::Exact);
         assert_eq!(s.status, Status::Optimal, "{at}: {:?}", s.reason);
         assert_eq!(s.method, Some("newton"), "{at}");
         assert!(
-            rel(s.objective / back, ORACLE) <= 1e-9,
-            "{at}: σ* {} against {ORACLE}",
+            rel(s.objective / back, oracle) <= 1e-9,
+            "{at}: σ* {} against {oracle}",
             s.objective / back
         );
     }
@@ -656,21 +662,7 @@ fn a_tendon_that_holds_a_contact_unloaded_is_the_grasp_without_it() {
 #[test]
 fn a_guess_whose_multipliers_the_apex_put_right_is_solved_again() {
     const ORACLE: f64 = 1.450032515658e-1;
-    let p = fixture("fuzz/interior-point-gap");
-    for (l, f) in [(1.0, 1.0), (1.1, 20.5), (1e-3, 1e3), (1e2, 1e-2)] {
-        let q = grasp_testkit::rescale(&p, l, f);
-        let back = (l * f) * (l * f);
-        let at = format!("lengths × {l:e}, forces × {f:e}");
-        let s = run(&q, Backend::ActiveSet, Cones::Exact);
-        assert_eq!(s.status, Status::Optimal, "{at}: {:?}", s.reason);
-        assert_eq!(s.method, Some("newton"), "{at}");
-        // The oracle's accuracy, 1e-10, and the certificate's 2e-9 on σ.
-        assert!(
-            rel(s.objective / back, ORACLE) <= 1e-9,
-            "{at}: σ {} against {ORACLE}",
-            s.objective / back
-        );
-    }
+    newtons_in_four_units("fuzz/interior-point-gap", ORACLE);
 }
 
 /// A joint whose row of Jᵀ is a combination of G's, `s cᵀ G` (so that the equalities
