@@ -12,7 +12,7 @@
 //! the tests of the hot start through the factor, with tolerances no looser, or the
 //! solve goes that way.
 
-use crate::{Engine, S_ROW};
+use crate::{is_set, Engine, AMPLIFIED, S_ROW};
 use grasp_core::matrix::{add_columns, min_value, norm_inf};
 use grasp_core::{Solution, Status};
 
@@ -95,13 +95,28 @@ impl Engine {
         lambda.copy_from_slice(&hm.l0[..t]);
         add_columns(lambda, &hm.lw[..6 * t], w, 1.0);
         let ltol = self.settings.multiplier_tolerance * ynorm * 10.0;
-        if !hm
-            .rows
-            .iter()
-            .zip(lambda.iter())
-            .all(|(&r, &l)| r == S_ROW || l >= -ltol)
-        {
+        // (With the multipliers' sum, for the test below.)
+        let mut sum = 0.0;
+        if !hm.rows.iter().zip(lambda.iter()).all(|(&r, &l)| {
+            if r == S_ROW {
+                return true;
+            }
+            sum += l;
+            l >= -ltol
+        }) {
             return false;
+        }
+        // An amplified key set goes through the factor, which looks again with the rows
+        // relaxed (`Engine::relaxed`), unless that was tried on this set and wrench.
+        // (‖y‖₂ ≥ ‖y‖∞: only a sum past the bound on ‖y‖∞ can be amplified.)
+        if sum > AMPLIFIED * ynorm {
+            let (set, at) = &self.amplified;
+            let y2: f64 = ws.z[..k].iter().map(|v| v * v).sum();
+            if sum * sum > AMPLIFIED * AMPLIFIED * y2
+                && !(at == w && is_set(&hm.rows, &self.h_row, set))
+            {
+                return false;
+            }
         }
         out.torque.clear();
         out.torque.extend_from_slice(&hm.t0);

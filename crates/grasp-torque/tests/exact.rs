@@ -11,7 +11,7 @@ use grasp_torque::{
 };
 
 mod common;
-use common::run;
+use common::{run, stated_excess};
 
 /// A bundled fixture.
 fn fixture(name: &str) -> GraspProblem {
@@ -1552,5 +1552,51 @@ fn an_inscribed_optimum_outside_the_cones_proves_nothing() {
     {
         let s = run(&p, Backend::Clarabel, Cones::Exact);
         assert_eq!(s.status, Status::Infeasible, "Clarabel: {:?}", s.reason);
+    }
+}
+
+/// An exact-cone answer from an interior-point iterate stopped short states the bound
+/// its gap gives, and the bound holds (`fixtures/fuzz/sfce-interior-point-stopped-short.json`,
+/// `fuzz_answers.py` seed 229135: three SFCe contacts, a joint's row of Jᵀ scaled,
+/// torque limits). In six systems of units each answer is `optimal` (within 2e-9) or
+/// `almost_optimal` with a bound of at most 1e-6, and any two agree within their
+/// bounds; with Clarabel, each is its certified σ* to that bound and Clarabel's own
+/// tolerance (1e-8).
+#[test]
+fn an_exact_answer_stopped_short_states_a_bound_that_holds() {
+    let p = fixture("fuzz/sfce-interior-point-stopped-short");
+    let mut answers = Vec::new();
+    for (l, f) in [
+        (1.0, 1.0),
+        (1.1, 20.5),
+        (1e-3, 1e3),
+        (1e2, 1e-2),
+        (0.29, 75.9),
+        (1e3, 1e3),
+    ] {
+        let q = grasp_testkit::rescale(&p, l, f);
+        let s = run(&q, Backend::ActiveSet, Cones::Exact);
+        let b = stated_excess(&s);
+        assert!(b <= 1e-6, "lengths × {l:e}, forces × {f:e}: bound {b:e}");
+        let sigma = s.objective / ((l * f) * (l * f));
+        #[cfg(feature = "clarabel")]
+        {
+            let c = run(&q, Backend::Clarabel, Cones::Exact);
+            assert_eq!(c.status, Status::Optimal, "{:?}", c.reason);
+            let star = c.objective / ((l * f) * (l * f));
+            assert!(
+                rel(sigma, star) <= b + 1e-8,
+                "lengths × {l:e}, forces × {f:e}: σ {sigma} against Clarabel's {star}"
+            );
+        }
+        answers.push((sigma, b));
+    }
+    for (i, &(a, ba)) in answers.iter().enumerate() {
+        for &(c, bc) in &answers[i + 1..] {
+            assert!(
+                rel(a, c) <= ba + bc,
+                "σ {a} (bound {ba:e}) and {c} ({bc:e})"
+            );
+        }
     }
 }

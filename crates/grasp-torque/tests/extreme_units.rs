@@ -11,7 +11,7 @@
 #![cfg(feature = "active-set")]
 
 use grasp_torque::{
-    solve, Backend, Cones, GraspProblem, Solution, SolverConfig, Status, WarmStart,
+    solve, Backend, Cones, GraspProblem, GraspSolver, Solution, SolverConfig, Status, WarmStart,
 };
 
 fn run(p: &GraspProblem, cones: Cones) -> Solution {
@@ -443,4 +443,88 @@ fn stated_bound(s: &Solution) -> f64 {
         .find_map(|w| w.strip_prefix("the exact-cone answer's certificate bounds σ only to "))
         .and_then(|w| w.split(' ').next()?.parse().ok())
         .expect("the bound in a warning")
+}
+
+/// A contact at its apex, a sliver from a force on a polygon's vertex
+/// (`fixtures/fuzz/apex-sliver-beside-a-vertex.json`, `fuzz_answers.py` seed 221997):
+/// a torque limit at 0 on a joint only the second contact loads keeps that contact
+/// unloaded, and the third contact's force then sits on its cone along a vertex of
+/// every polygon. The rows' rounding leaves the two 1e-11 apart, and the native key
+/// set there (multipliers of 2.3e8 to 2.3e10 on two faces and the limit) was σ 14 %
+/// above the exact cones' σ*, and 4.4e-6 apart between systems of units. The rows
+/// relaxed within tolerance find the key set that reaches it: in 20 systems of units
+/// σ(N) falls as N doubles from 4 to 32, from 1.4e-9 above σ* to 1.6e-10 above it,
+/// each N's σ the same in every system to 1e-12.
+#[test]
+fn an_apex_a_sliver_from_a_vertex_is_reached_within_tolerance() {
+    let p = fuzz_fixture("apex-sliver-beside-a-vertex");
+    let sigma_star = 0.190_072_315_040_257_6;
+    let mut first: Option<Vec<f64>> = None;
+    for l in [1e-3, 1.58e-3, 1.0, 11.5, 1e3] {
+        for f in [1e-3, 1.0, 101.5, 1e3] {
+            let mut q = grasp_testkit::rescale(&p, l, f);
+            let at = format!("lengths × {l:e}, forces × {f:e}");
+            let exact = run(&q, Cones::Exact);
+            assert_eq!(exact.status, Status::Optimal, "{at}: {:?}", exact.reason);
+            let r = (sigma_back(&p, &exact, l * f) - sigma_star) / sigma_star;
+            assert!(r.abs() <= 1e-9, "{at}: exact σ* off by {r:e}");
+            let mut sigmas = Vec::new();
+            for sides in [4, 8, 16, 32] {
+                q.linearization.sides = sides;
+                let s = run(&q, Cones::Linear);
+                assert_eq!(
+                    s.status,
+                    Status::Optimal,
+                    "{at}, N = {sides}: {:?}",
+                    s.reason
+                );
+                let sigma = sigma_back(&p, &s, l * f);
+                let r = (sigma - sigma_star) / sigma_star;
+                assert!(
+                    (-1e-12..=2e-9).contains(&r),
+                    "{at}, N = {sides}: σ off by {r:e}"
+                );
+                if let Some(&last) = sigmas.last() {
+                    assert!(sigma <= last, "{at}, N = {sides}: σ {sigma} after {last}");
+                }
+                sigmas.push(sigma);
+            }
+            let first = first.get_or_insert_with(|| sigmas.clone());
+            for (a, b) in first.iter().zip(&sigmas) {
+                assert!(
+                    (a - b).abs() <= 1e-12 * a,
+                    "{at}: σ {b} where the first system gives {a}"
+                );
+            }
+        }
+    }
+}
+
+/// The same grasp in a control loop (`GraspSolver::resolve`, the wrench walking by 1 %
+/// a tick, both ways): every tick, hot or not, is the cold solve's answer to 1e-12,
+/// with the relaxed key set's σ.
+#[test]
+fn a_control_loop_keeps_the_key_set_found_within_tolerance() {
+    let p = fuzz_fixture("apex-sliver-beside-a-vertex");
+    let config = SolverConfig {
+        backend: Some(Backend::ActiveSet),
+        ..Default::default()
+    };
+    let mut ctl = GraspSolver::new(&p, &config).unwrap();
+    let mut w = p.wrench;
+    for k in 0..40 {
+        w[k % 6] *= if k % 12 < 6 { 1.01 } else { 1.0 / 1.01 };
+        let warm = ctl.resolve(&w).unwrap().clone();
+        let mut q = p.clone();
+        q.wrench = w;
+        let cold = run(&q, Cones::Linear);
+        assert_eq!(warm.status, Status::Optimal, "tick {k}: {:?}", warm.reason);
+        assert_eq!(cold.status, Status::Optimal, "tick {k}: {:?}", cold.reason);
+        assert!(
+            (warm.objective - cold.objective).abs() <= 1e-12 * cold.objective,
+            "tick {k}: σ {} warm, {} cold",
+            warm.objective,
+            cold.objective
+        );
+    }
 }

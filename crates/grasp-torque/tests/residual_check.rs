@@ -10,7 +10,9 @@ use grasp_torque::{
     GraspProblem, GraspSolver, Matrix, Reason, Solution, SolverConfig, Status, WarmStart,
 };
 
-/// `max_i |M_i x − t_i|` and the largest `Σ_j |M_ij x_j| + |t_i|` (the sums' size).
+mod common;
+use common::stated_excess;
+
 /// A cold solve of `q` at its own wrench.
 fn solved(q: &GraspProblem, config: &SolverConfig) -> Solution {
     GraspSolver::new(q, config)
@@ -26,6 +28,7 @@ fn fuzz_fixture(name: &str) -> GraspProblem {
     grasp_torque::load_problem(format!("{dir}/{name}.json")).unwrap()
 }
 
+/// `max_i |M_i x − t_i|` and the largest `Σ_j |M_ij x_j| + |t_i|` (the sums' size).
 fn residual(m: &Matrix, x: &[f64], t: &[f64]) -> (f64, f64) {
     (0..m.nrows()).fold((0.0f64, 0.0f64), |(r, s), i| {
         let row = m.row(i);
@@ -296,21 +299,6 @@ fn a_refused_linear_answer_is_held_by_the_interior_point_method() {
             s.objective
         );
         last = s.objective;
-    }
-}
-
-/// The bound on σ's excess an answer states: 2e-9 when `optimal`, its warning's when
-/// `almost_optimal`.
-fn stated_excess(s: &Solution) -> f64 {
-    match s.status {
-        Status::Optimal => 2e-9,
-        Status::AlmostOptimal => s
-            .warnings
-            .iter()
-            .find_map(|w| w.split("certificate bounds σ only to ").nth(1))
-            .and_then(|w| w.split(' ').next()?.parse().ok())
-            .expect("the bound in a warning"),
-        _ => panic!("no answer: {:?}", s.reason),
     }
 }
 
