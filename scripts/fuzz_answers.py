@@ -41,9 +41,9 @@ docs/solver.md, "Limits").
 grasps one whose torque the wrench fixes (its row of Jᵀ a multiple of a combination
 of G's rows), with one side of its limit exactly at that torque, and checks that the
 answer is the one without the limit, in any units. `fuzz_answers.py statuses FROM
-COUNT OTHER_BIN [N...]` lists the seeds of the main search whose status, or optimal σ
-beyond 1e-12, differs between this binary and OTHER_BIN (exact cones, and linear ones
-at each N given, else at the file's). `fuzz_answers.py infeasible FROM COUNT` solves
+COUNT OTHER_BIN [N...] [clarabel]` lists the seeds of the main search whose status, or
+optimal σ beyond 1e-12, differs between this binary and OTHER_BIN (exact cones, and
+linear ones at each N given, else at the file's; with `clarabel`, Clarabel's answers). `fuzz_answers.py infeasible FROM COUNT` solves
 each of the main search's problems that the native exact solver calls infeasible again
 with Clarabel's exact cones, and lists those Clarabel holds with every contact inside
 its cone (friction margins above −1e-3: an answer within the check's tolerance of the
@@ -54,6 +54,13 @@ linear cones at N = 4, 8, 16, 32 and 64 and with exact cones, and lists every pa
 runs where more sides (or the exact cones) give a higher optimal σ or call a grasp
 infeasible that fewer sides hold: each polygon's vertices are among the next one's, so
 either is a wrong answer.
+
+`fuzz_answers.py backends FROM COUNT` solves each of the main search's problems with
+the native solver and with Clarabel, linear cones (the file's N) and exact, and lists
+each run where one backend calls the grasp infeasible and the other answers it, with
+whether that answer passes the checks above: a feasible answer that does makes the
+`infeasible` wrong. `fuzz_answers.py write SEED` prints the main search's problem for
+SEED, for the command line (`grasp-torque compare`, say).
 
 `fuzz_answers.py joint-units FROM COUNT` solves the sweep's grasps with each joint's
 torque in its own unit (Jᵀ's row times s_j, 10^U(−2, 2), the weight 1/s_j²) and
@@ -407,14 +414,15 @@ def pinned_limits(start, count):
     sys.exit(1 if problems else 0)
 
 
-def statuses(start, count, other, sides=()):
+def statuses(start, count, other, sides=(), backend=()):
     """Seeds FROM.. of the main search solved by this binary and by `other` (an older
     commit's, say): each status that differs, and each σ that differs by more than
     1e-12 relative where both are optimal; exact cones, and linear ones at the file's
-    N or at each of `sides`."""
+    N or at each of `sides`; with `backend`, its arguments (`--backend clarabel`)."""
     bundled, changed, moved = sources(), 0, 0
     global BIN
-    runs = [("exact", ())] + ([("linear", ("--sides", str(n))) for n in sides] or [("linear", ())])
+    runs = [("exact", backend)] + ([("linear", ("--sides", str(n), *backend)) for n in sides]
+                                   or [("linear", backend)])
     for seed in range(start, start + count):
         rnd = random.Random(seed)
         name, p = rnd.choice(bundled)
@@ -510,7 +518,45 @@ def nested(start, count):
     print(f"{count} problems, {solved} pairs both answered: {problems} contradictions")
 
 
+def seed_problem(bundled, seed):
+    """The main search's problem for `seed`: its source's name, the problem, the edits
+    and the rest of the seed's random stream."""
+    rnd = random.Random(seed)
+    name, p = rnd.choice(bundled)
+    p = json.loads(json.dumps(p))
+    edits = mutate(rnd, p)
+    return name, p, edits, rnd
+
+
+def backends(start, count):
+    """Seeds FROM.. of the main search where the native solver and Clarabel disagree on
+    whether the grasp is feasible, linear (the file's N) and exact cones."""
+    bundled, found = sources(), 0
+    for seed in range(start, start + count):
+        name, p, edits, _ = seed_problem(bundled, seed)
+        for cones in ("linear", "exact"):
+            native = solve(p, cones)[0] or {}
+            clarabel = solve(p, cones, "--backend", "clarabel")[0] or {}
+            pair = {native.get("status"), clarabel.get("status")}
+            answered = pair & {"optimal", "almost_optimal"}
+            if "infeasible" in pair and answered:
+                d = native if native.get("status") in answered else clarabel
+                who = "native" if d is native else "clarabel"
+                problems = wrong(p, d)
+                print(f"seed {seed} ({name}: {', '.join(edits)}) {cones}: native {native.get('status')}, "
+                      f"clarabel {clarabel.get('status')}; the {who} answer "
+                      + (f"fails the file's checks: {problems[0]}" if problems else "passes the file's checks"))
+                found += 1
+    print(f"{count} problems: {found} runs where one backend calls infeasible what the other answers")
+
+
 def main():
+    if sys.argv[1] == "write":
+        print(json.dumps(seed_problem(sources(), int(sys.argv[2]))[1], indent=1))
+        sys.exit(0)
+    if sys.argv[1] == "backends":
+        backends(int(sys.argv[2]), int(sys.argv[3]))
+        sys.exit(0)
     if sys.argv[1] == "moment-arms":
         moment_arms(float(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]))
     if sys.argv[1] == "joint-units":
@@ -524,7 +570,9 @@ def main():
         nested(int(sys.argv[2]), int(sys.argv[3]))
         sys.exit(0)
     if sys.argv[1] == "statuses":
-        statuses(int(sys.argv[2]), int(sys.argv[3]), sys.argv[4], [int(n) for n in sys.argv[5:]])
+        rest = sys.argv[5:]
+        backend = ("--backend", "clarabel") if "clarabel" in rest else ()
+        statuses(int(sys.argv[2]), int(sys.argv[3]), sys.argv[4], [int(n) for n in rest if n != "clarabel"], backend)
         sys.exit(0)
     start, count = int(sys.argv[1]), int(sys.argv[2])
     problems, counts = 0, {}

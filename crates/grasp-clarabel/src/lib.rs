@@ -261,7 +261,12 @@ impl ClarabelSolver {
                 ),
             });
         }
-        let floor = RAY_MARGIN * ray.stationarity.max(CERTIFICATE_TOLERANCE);
+        // (Each free direction's terms against their own: `RayCheck::directions`.)
+        let floor = RAY_MARGIN
+            * ray
+                .stationarity
+                .max(ray.directions)
+                .max(CERTIFICATE_TOLERANCE);
         if ray.dual <= tol && ray.particular <= tol && ray.stationarity <= tol && ray.value < -floor
         {
             Ok(Reason::DualRay {
@@ -270,8 +275,8 @@ impl ClarabelSolver {
             })
         } else {
             Err(format!(
-                "torque terms left {:.1e}, value {:.1e}, dual cones missed by {:.1e}, the equalities by {:.1e} (relative; a ray needs at most {tol:.0e} each and a value below −{floor:.1e})",
-                ray.stationarity, ray.value, ray.dual, ray.particular
+                "torque terms left {:.1e} ({:.1e} in a free direction against its own), value {:.1e}, dual cones missed by {:.1e}, the equalities by {:.1e} (relative; a ray needs at most {tol:.0e} each and a value below −{floor:.1e})",
+                ray.stationarity, ray.directions, ray.value, ray.dual, ray.particular
             ))
         }
     }

@@ -245,3 +245,33 @@ fn polishing_recovers_answers_the_interior_point_leaves_short() {
         );
     }
 }
+
+/// A dual ray whose torque terms cancel against the largest column but not in the other
+/// free directions proves nothing (`fixtures/fuzz/ray-short-of-a-scaled-joint.json`,
+/// `fuzz_answers.py backends` seed 228756: a joint whose row of Jᵀ is scaled far past
+/// the others'). Clarabel called the grasp infeasible, linear and exact, where the
+/// native solver holds it; now it gives no such proof, and the native answers stand.
+#[test]
+fn a_ray_that_cancels_only_the_largest_column_proves_nothing() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/fuzz/ray-short-of-a-scaled-joint.json"
+    );
+    let p = grasp_torque::load_problem(path).unwrap();
+    for cones in [Cones::Linear, Cones::Exact] {
+        let native = run(&p, Backend::ActiveSet, cones);
+        assert_eq!(
+            native.status,
+            Status::Optimal,
+            "{cones}: {:?}",
+            native.reason
+        );
+        let clarabel = run(&p, Backend::Clarabel, cones);
+        assert_ne!(
+            clarabel.status,
+            Status::Infeasible,
+            "{cones}: {:?}",
+            clarabel.reason
+        );
+    }
+}
