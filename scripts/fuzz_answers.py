@@ -43,11 +43,12 @@ of G's rows), with one side of its limit exactly at that torque, and checks that
 answer is the one without the limit, in any units. `fuzz_answers.py statuses FROM
 COUNT OTHER_BIN [N...] [clarabel]` lists the seeds of the main search whose status, or
 optimal σ beyond 1e-12, differs between this binary and OTHER_BIN (exact cones, and
-linear ones at each N given, else at the file's; with `clarabel`, Clarabel's answers). `fuzz_answers.py infeasible FROM COUNT` solves
-each of the main search's problems that the native exact solver calls infeasible again
-with Clarabel's exact cones, and lists those Clarabel holds with every contact inside
-its cone (friction margins above −1e-3: an answer within the check's tolerance of the
-largest force can leave a small contact well outside).
+linear ones at each N given, else at the file's; with `clarabel`, Clarabel's
+answers). `fuzz_answers.py infeasible FROM COUNT` solves each of the main search's
+problems that the native exact solver calls infeasible again with Clarabel's exact
+cones, and lists those Clarabel holds with every contact inside its cone (friction
+margins above −1e-3: an answer within the check's tolerance of the largest force can
+leave a small contact well outside).
 
 `fuzz_answers.py nested FROM COUNT` solves each of the main search's problems with
 linear cones at N = 4, 8, 16, 32 and 64 and with exact cones, and lists every pair of
@@ -424,10 +425,7 @@ def statuses(start, count, other, sides=(), backend=()):
     runs = [("exact", backend)] + ([("linear", ("--sides", str(n), *backend)) for n in sides]
                                    or [("linear", backend)])
     for seed in range(start, start + count):
-        rnd = random.Random(seed)
-        name, p = rnd.choice(bundled)
-        p = json.loads(json.dumps(p))
-        edits = mutate(rnd, p)
+        name, p, edits, rnd = seed_problem(bundled, seed)
         for cones, extra in runs:
             here = solve(p, cones, *extra)[0] or {}
             BIN, mine = other, BIN
@@ -449,10 +447,7 @@ def infeasible(start, count):
     and Clarabel's exact cones hold with every contact inside its cone."""
     bundled, kinds, held = sources(), {}, 0
     for seed in range(start, start + count):
-        rnd = random.Random(seed)
-        name, p = rnd.choice(bundled)
-        p = json.loads(json.dumps(p))
-        edits = mutate(rnd, p)
+        name, p, edits, rnd = seed_problem(bundled, seed)
         d = solve(p, "exact")[0]
         if not d or d["status"] != "infeasible":
             continue
@@ -498,10 +493,7 @@ def nested(start, count):
     bundled, problems, solved = sources(), 0, 0
     answered = ("optimal", "almost_optimal")
     for seed in range(start, start + count):
-        rnd = random.Random(seed)
-        name, p = rnd.choice(bundled)
-        p = json.loads(json.dumps(p))
-        edits = mutate(rnd, p)
+        name, p, edits, rnd = seed_problem(bundled, seed)
         runs = [(f"N = {n}", solve(p, "linear", "--sides", str(n))[0]) for n in (4, 8, 16, 32, 64)]
         runs.append(("exact", solve(p, "exact")[0]))
         for (a, da), (b, db) in ((x, y) for i, x in enumerate(runs) for y in runs[i + 1:]):
@@ -578,10 +570,7 @@ def main():
     problems, counts = 0, {}
     bundled = sources()
     for seed in range(start, start + count):
-        rnd = random.Random(seed)
-        name, p = rnd.choice(bundled)
-        p = json.loads(json.dumps(p))
-        edits = mutate(rnd, p)
+        name, p, edits, rnd = seed_problem(bundled, seed)
         at = f"seed {seed} ({name}: {', '.join(edits)})"
         unit_free = p.get("internal_forces") != "euclidean" and (p.get("linearization") or {}).get("sfce_spacing") != "paper"
         F, L = 10 ** rnd.uniform(-3, 3), 10 ** rnd.uniform(-3, 3)
