@@ -1084,6 +1084,27 @@ impl GraspModel {
         6 + self.unactuated.nrows() + j
     }
 
+    /// The torques' scales in the objective, `√w_j` times their row's reach
+    /// ([`Self::row_reach`]: what a unit force does to torque j), and the largest over
+    /// the smallest nonzero one, `(largest j, smallest j, ratio)`; None where no two
+    /// joints carry force. Far apart (a joint in a unit 1e8 times another's without
+    /// the weight that undoes it, or moment arms 1e-8 of the others'), the smaller
+    /// torques are at the rounding of the larger: docs/solver.md, "Limits".
+    pub fn torque_spread(&self) -> Option<(usize, usize, f64)> {
+        let scale = |j: usize| self.weights[j].sqrt() * self.row_reach[self.torque_row(j)];
+        let (mut hi, mut lo) = (None::<usize>, None::<usize>);
+        for j in (0..self.joints()).filter(|&j| scale(j) > 0.0) {
+            if hi.is_none_or(|h| scale(j) > scale(h)) {
+                hi = Some(j);
+            }
+            if lo.is_none_or(|l| scale(j) < scale(l)) {
+                lo = Some(j);
+            }
+        }
+        let (hi, lo) = (hi?, lo?);
+        (hi != lo).then(|| (hi, lo, scale(hi) / scale(lo)))
+    }
+
     /// Row i of `[G; E; Jᵀ]` (the order of [`Self::row_reach`] and [`Self::row_scale`]).
     pub fn stacked_row(&self, i: usize) -> &[f64] {
         let k = self.unactuated.nrows();

@@ -613,6 +613,7 @@ pub fn solve_into_with(
         fall_back_after_refusal(solver, wrench, warm, start, out);
     }
     let qp = solver.problem();
+    note_torque_spread(qp, out);
     if let Some(a) = &qp.model.actuators {
         if out.status == Status::Infeasible && a.unactuated_directions.nrows() > 0 {
             if let Some(cause) = out.reason.take() {
@@ -637,6 +638,39 @@ pub fn complete_deferred(solver: &mut dyn TorqueSolver, wrench: &[f64; 6], out: 
     solver.problem().complete(wrench, tol, solver.name(), out);
     if refused(out) {
         fall_back_after_refusal(solver, wrench, &WarmStart::default(), None, out);
+    }
+    note_torque_spread(solver.problem(), out);
+}
+
+/// The spread of the torques' scales ([`crate::GraspModel::torque_spread`]) beyond
+/// which a grasp without an answer says so: 8 of the 9 no-answers of `fuzz_answers.py
+/// 234500 3000` had spreads of 2.1e7 to 2.2e9 (the ninth, a near-passive internal
+/// force, of 3), while real hands' are below 1e3 (revolute joints beside prismatic
+/// ones, in metres).
+const TORQUE_SPREAD_NOTE: f64 = 1e4;
+
+/// A warning on an answer that is not one (`numerical_failure`, `iteration_limit`)
+/// where the torques' scales are more than [`TORQUE_SPREAD_NOTE`] apart: the likely
+/// cause, and what removes it. (Only on those statuses: no cost to a solve that
+/// answers.)
+#[cold]
+fn note_torque_spread(qp: &TorqueQp, out: &mut Solution) {
+    if !matches!(
+        out.status,
+        Status::NumericalFailure | Status::IterationLimit
+    ) {
+        return;
+    }
+    let model = &*qp.model;
+    if let Some((hi, lo, ratio)) = model.torque_spread().filter(|s| s.2 > TORQUE_SPREAD_NOTE) {
+        let scale = |j: usize| model.weights[j].sqrt() * model.row_reach[model.torque_row(j)];
+        out.warnings.push(format!(
+            "the torques' scales in the objective (√w_j Σ_i |Jᵀ_ji|, mz as mz/mu_torsion) are {ratio:.1e} apart: {} at {:.3e}, {} at {:.3e}; the smaller torques are then near the rounding of the larger, the usual cause of this status (docs/solver.md, \"Limits\"): torques in comparable units, or weights that balance the scales, avoid it",
+            model.joint_name(hi),
+            scale(hi),
+            model.joint_name(lo),
+            scale(lo),
+        ));
     }
 }
 

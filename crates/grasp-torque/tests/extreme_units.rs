@@ -528,3 +528,79 @@ fn a_control_loop_keeps_the_key_set_found_within_tolerance() {
         );
     }
 }
+
+/// A grasp whose torques' scales in the objective are 1e8 apart
+/// (`fixtures/fuzz/one-joint-in-another-unit.json`, `fuzz_answers.py` seed 236143:
+/// Table 1's carbon pen with joint 5's row of Jᵀ × 2.5e7, its weight left at 1). Every
+/// solve that gives no answer says so in a warning naming both ends and the spread,
+/// here computed from the file (`√w_j Σ_i |Jᵀ_ji|`, the contacts being PCwF); a solve
+/// that answers, or one whose joint is in a unit nearer the others', carries none. The iteration cap
+/// of 1 forces the no-answer on the linear solve.
+#[test]
+fn a_grasp_without_an_answer_names_its_torque_spread() {
+    let p = fuzz_fixture("one-joint-in-another-unit");
+    let scales = |p: &GraspProblem| -> Vec<f64> {
+        let jt = &p.jacobian_transpose;
+        (0..jt.nrows())
+            .map(|j| {
+                let w = p.torque_weights.as_ref().map_or(1.0, |w| w[j]);
+                w.sqrt() * jt.row(j).iter().map(|v| v.abs()).sum::<f64>()
+            })
+            .collect()
+    };
+    let s = scales(&p);
+    let by = |a: &usize, b: &usize| s[*a].total_cmp(&s[*b]);
+    let (hi, lo) = (
+        (0..s.len()).max_by(by).unwrap(),
+        (0..s.len()).min_by(by).unwrap(),
+    );
+    let ratio = s[hi] / s[lo];
+    assert!(ratio > 1e7, "the fixture's spread {ratio:e}");
+    let note = |s: &Solution| {
+        s.warnings
+            .iter()
+            .filter(|w| w.starts_with("the torques' scales in the objective"))
+            .cloned()
+            .collect::<Vec<_>>()
+    };
+    let capped = |p: &GraspProblem| {
+        let mut config = SolverConfig {
+            backend: Some(Backend::ActiveSet),
+            ..Default::default()
+        };
+        config.active_set.max_iterations = 1;
+        let mut solver = config.build(config.qp(p).unwrap()).unwrap();
+        solve(solver.as_mut(), &p.wrench, &WarmStart::default()).unwrap()
+    };
+    let a = capped(&p);
+    assert_eq!(a.status, Status::IterationLimit);
+    let [w] = note(&a).try_into().expect("one warning on the spread");
+    let name = |j: usize| p.joint_names[j].clone();
+    for part in [format!("{ratio:.1e} apart"), name(hi), name(lo)] {
+        assert!(w.contains(&part), "{part:?} in {w:?}");
+    }
+    // Joint hi's torque in a unit 1e6 times larger: its row of Jᵀ 1e6 times smaller.
+    // (Its weight cannot undo as much: weights are within 1e8 of each other.)
+    let mut balanced = p.clone();
+    for v in balanced.jacobian_transpose.row_mut(hi) {
+        *v *= 1e-6;
+    }
+    let t = scales(&balanced);
+    let (big, small) = t
+        .iter()
+        .fold((0.0f64, f64::INFINITY), |(a, b), v| (a.max(*v), b.min(*v)));
+    assert!(big / small < 1e4, "the balanced spread {:e}", big / small);
+    let b = capped(&balanced);
+    assert_eq!(b.status, Status::IterationLimit);
+    assert!(note(&b).is_empty(), "{:?}", b.warnings);
+    for cones in [Cones::Linear, Cones::Exact] {
+        let s = run(&p, cones);
+        assert_eq!(
+            note(&s).len(),
+            usize::from(!s.status.has_answer()),
+            "{cones:?}: {:?} {:?}",
+            s.status,
+            s.warnings
+        );
+    }
+}
