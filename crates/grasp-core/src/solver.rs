@@ -665,7 +665,7 @@ fn note_torque_spread(qp: &TorqueQp, out: &mut Solution) {
     if let Some((hi, lo, ratio)) = model.torque_spread().filter(|s| s.2 > TORQUE_SPREAD_NOTE) {
         let scale = |j: usize| model.weights[j].sqrt() * model.row_reach[model.torque_row(j)];
         out.warnings.push(format!(
-            "the torques' scales in the objective (√w_j Σ_i |Jᵀ_ji|, mz as mz/mu_torsion) are {ratio:.1e} apart: {} at {:.3e}, {} at {:.3e}; the smaller torques are then near the rounding of the larger, the usual cause of this status (docs/solver.md, \"Limits\"): torques in comparable units, or weights that balance the scales, avoid it",
+            "the torques' scales in the objective (√w_j Σ_i |Jᵀ_ji|, mz as mz/mu_torsion) are {ratio:.1e} apart: {} at {:.3e}, {} at {:.3e}; the smaller torques are then near the rounding of the larger, a common cause of this status (docs/solver.md, \"Limits\"): torques in comparable units, or weights that balance the scales, avoid it",
             model.joint_name(hi),
             scale(hi),
             model.joint_name(lo),
