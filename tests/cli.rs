@@ -486,3 +486,54 @@ fn the_sweeps_hard_grasps_are_answered_on_the_exact_cones() {
         }
     }
 }
+
+/// Rows of Jᵀ within the rank tolerance of another joint's on the same contact
+/// (`fixtures/fuzz/joint-rows-below-the-rank-tolerance.json`, `fuzz_answers.py` seed
+/// 228942: one joint's torque in a unit 5.9e8 times smaller): the model makes them
+/// zero, and the report says so for each, with the ratio computed here from the file
+/// (each row's largest entry on the third contact over the largest of any joint's
+/// there; PCwF, so no mz). Their torques are 0; the paper example has no such row.
+#[test]
+fn joint_rows_the_model_makes_zero_are_named() {
+    let path = fixture("fuzz/joint-rows-below-the-rank-tolerance.json");
+    let p: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let jt: Vec<Vec<f64>> = serde_json::from_value(p["jacobian_transpose"].clone()).unwrap();
+    let names: Vec<String> = serde_json::from_value(p["joint_names"].clone()).unwrap();
+    let contact = 6..9;
+    let top = |i: usize| contact.clone().map(|c| jt[i][c].abs()).fold(0.0, f64::max);
+    let scale = (0..jt.len()).map(top).fold(0.0, f64::max);
+    let largest = (0..jt.len()).find(|&i| top(i) == scale).unwrap();
+    let out = run(&["solve", &path, "--format", "json"]);
+    assert_eq!(out.status.code(), Some(0));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let warnings: Vec<String> = serde_json::from_value(v["warnings"].clone()).unwrap();
+    let zeroed: Vec<&String> = warnings
+        .iter()
+        .filter(|w| w.contains("the model makes it zero"))
+        .collect();
+    let mut named = 0;
+    for (j, row) in jt.iter().enumerate() {
+        let ratio = top(j) / scale;
+        let touches_only_it = row
+            .iter()
+            .enumerate()
+            .all(|(c, v)| *v == 0.0 || contact.contains(&c));
+        if j == largest || ratio == 0.0 || ratio > 1e-9 || !touches_only_it {
+            continue;
+        }
+        let w = zeroed
+            .iter()
+            .find(|w| w.starts_with(&format!("{}:", names[j])))
+            .unwrap_or_else(|| panic!("{} in {zeroed:?}", names[j]));
+        assert!(
+            w.contains(&format!("at most {ratio:.1e} of {}'s", names[largest])),
+            "{w}"
+        );
+        assert_eq!(v["torque"][j].as_f64(), Some(0.0));
+        named += 1;
+    }
+    assert_eq!((named, zeroed.len()), (2, 2), "{zeroed:?}");
+    let paper = run(&["solve", &fixture("paper-example.json"), "--format", "json"]);
+    assert!(!String::from_utf8_lossy(&paper.stderr).contains("makes it zero"));
+}

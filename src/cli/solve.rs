@@ -55,7 +55,9 @@ pub(crate) fn run(args: &SolveArgs) -> Result<u8> {
         active_set: None,
     };
     solver.solve(&problem.wrench, &warm)?;
-    let sol = solver.solution();
+    let mut sol = solver.solution().clone();
+    sol.warnings.extend(super::model_warnings(solver.problem()));
+    let sol = &sol;
     for w in &sol.warnings {
         eprintln!("warning: {w}");
     }

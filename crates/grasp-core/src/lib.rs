@@ -25,7 +25,7 @@ pub use conic::{Certificate, ConeKind, ConicForm, RayCheck};
 pub use contact::ContactModel;
 pub use error::{ModelError, ProblemError};
 pub use matrix::Matrix;
-pub use model::{Equilibrium, GraspModel, InternalForces, ModelOptions};
+pub use model::{Equilibrium, GraspModel, InternalForces, ModelOptions, ZeroedJoint};
 pub use problem::{GraspProblem, TorqueLimit};
 pub use qp::{
     ConeRepr, Constraints, ContactBlock, EqFactors, ForceSpaceQp, InequalityRows, LeastDistance,

@@ -193,6 +193,15 @@ pub struct GraspModel {
     pub force_cols: Vec<f64>,
     /// The passive joint torques (joint space), empty without any.
     pub passive: Passive,
+    /// Joints whose row of Jᵀ is nonzero but at most the rank tolerance of what the
+    /// joints do with each contact it touches, which the model makes zero (a joint
+    /// whose axis passes through its contact, whose kinematics left rounding in its
+    /// row). Every answer holds the zero row instead (joint j's torque is 0, less any
+    /// passive torque), so the given row's `Jᵀ_j f` is matched only to the rank
+    /// tolerance of the largest joint's torque there, not to joint j's own scale. A
+    /// joint whose torque is in a unit 1e9 times another's on the same contact lands
+    /// here too.
+    pub zeroed_joints: Vec<ZeroedJoint>,
 }
 
 /// What passive joint torques `τ_p` (`Jᵀ f = T u + τ_p`) add to the model: constants
@@ -306,8 +315,28 @@ impl ActuatorSpace {
     }
 }
 
-/// The rows of `[E; Jᵀ]` and their passive targets.
-type ActuatorRows = (Matrix, Matrix, Option<ActuatorSpace>, Vec<f64>);
+/// The rows of `[E; Jᵀ]`, their passive targets, and the joints whose rows were made
+/// zero.
+type ActuatorRows = (
+    Matrix,
+    Matrix,
+    Option<ActuatorSpace>,
+    Vec<f64>,
+    Vec<ZeroedJoint>,
+);
+
+/// A joint whose row of Jᵀ the rank decision made zero ([`GraspModel::zeroed_joints`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ZeroedJoint {
+    /// The joint (a row of Jᵀ).
+    pub joint: usize,
+    /// Its row's largest entry over the largest of any joint's on the same contact, per
+    /// contact, the most of these (mz counted as mz/mu_torsion): at most the rank
+    /// tolerance.
+    pub ratio: f64,
+    /// The joint with that largest entry, on the contact where the ratio is taken.
+    pub against: usize,
+}
 
 /// The decision rows `T⁺ Jᵀ`, the unactuated rows `Q₂ᵀ Jᵀ` and the joint space, or
 /// `Jᵀ` itself without a transmission (or with `T = I`); and the passive torques' targets
@@ -334,6 +363,42 @@ fn actuator_space(
     };
     // Joint space first: the core's check of `Jᵀ f = T u + τ_p` reads these rows, and
     // a row of rounding judged against its own size would fail on any force.
+    let size = |i: usize, j: usize| (jt[(i, j)] * unit[j]).abs();
+    let zeroed = (0..jt.nrows())
+        .filter(|&i| negligible(jt, i, unit, &scale, rank_tolerance))
+        .map(|joint| {
+            // (A zero column's scale is 0, and so is the row's entry: that 0/0 is NaN,
+            // which `max` passes over.)
+            let (ratio, col) = (0..n).fold((0.0f64, 0), |(r, c), j| {
+                let v = size(joint, j) / scale[j];
+                if v > r {
+                    (v, j)
+                } else {
+                    (r, c)
+                }
+            });
+            let contact = cols
+                .iter()
+                .find(|c| c.contains(&col))
+                .cloned()
+                .unwrap_or(col..col + 1);
+            let mut against = joint;
+            for i in 0..jt.nrows() {
+                if contact
+                    .clone()
+                    .any(|j| size(i, j) == scale[j] && scale[j] > 0.0)
+                {
+                    against = i;
+                    break;
+                }
+            }
+            ZeroedJoint {
+                joint,
+                ratio,
+                against,
+            }
+        })
+        .collect();
     let joint_rows = flush(jt.clone(), &|_| 1.0);
     let Some(t) = p.transmission.as_ref().filter(|t| !t.is_identity()) else {
         return Ok((
@@ -341,6 +406,7 @@ fn actuator_space(
             Matrix::zeros(0, n),
             None,
             p.passive_torque.clone().unwrap_or_default(),
+            zeroed,
         ));
     };
     let tm = &t.matrix;
@@ -389,6 +455,7 @@ fn actuator_space(
             joint_reach: Vec::new(),
         }),
         targets,
+        zeroed,
     ))
 }
 
@@ -685,7 +752,7 @@ impl GraspModel {
                 }
             }
         }
-        let (jt, unactuated, mut actuators, row_targets) =
+        let (jt, unactuated, mut actuators, row_targets, zeroed_joints) =
             actuator_space(p, &flush_unit, &cols, opts.rank_tolerance)?;
         let (k, m) = (unactuated.nrows(), jt.nrows());
         // G's force rows and its moment rows, each block likewise.
@@ -1062,6 +1129,7 @@ impl GraspModel {
             stacked_cols,
             eq_cols,
             jacobian_transpose: jt,
+            zeroed_joints,
             unactuated,
             actuators,
             force_unit_inv: force_unit.iter().map(|u| 1.0 / u).collect(),
