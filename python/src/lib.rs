@@ -228,7 +228,10 @@ impl Solver {
             s.solve(&w, &start)
         }
         .map_err(invalid)?;
-        Ok(SolveResult::new(sol, &self.problem, backend, self.cones))
+        let mut result = SolveResult::new(sol, &self.problem, backend, self.cones);
+        let model = &s.problem().model;
+        result.data.warnings.extend(model.zeroed_joint_warnings());
+        Ok(result)
     }
 
     /// Completes what the lazy check deferred for the last answer: forces, residuals

@@ -231,3 +231,24 @@ def test_diagnose_falls_back_where_the_full_check_does():
     assert rel_close(c.objective, full.objective, 1e-9)
     if first.diagnostics["deferred"]:
         assert any("fallback" in w for w in c.warnings)
+
+
+def test_joint_rows_the_model_makes_zero_are_named_like_the_cli(cli):
+    # One joint's torque in a unit 5.9e8 times smaller puts two others' rows of Jᵀ
+    # within the rank tolerance of its own: the model makes them zero, and the answer
+    # says so, as the command line's does. A grasp without an answer names its
+    # torques' spread likewise.
+    path = ROOT / "fixtures" / "fuzz" / "joint-rows-below-the-rank-tolerance.json"
+    expected, _ = cli_solve(cli, path)
+    r = gt.Solver(path).solve()
+    zeroed = [w for w in r.warnings if "the model makes it zero" in w]
+    assert len(zeroed) == 2
+    assert zeroed == [w for w in expected["warnings"] if "the model makes it zero" in w]
+    assert {w.split(":")[0] for w in zeroed} == {"middle_bottom", "middle_top"}
+    path = ROOT / "fixtures" / "fuzz" / "one-joint-in-another-unit.json"
+    expected, _ = cli_solve(cli, path, "--cones", "exact")
+    r = gt.Solver(path, cones="exact").solve()
+    assert r.status == expected["status"]
+    spread = [w for w in r.warnings if w.startswith("the torques' scales")]
+    assert spread == [w for w in expected["warnings"] if w.startswith("the torques' scales")]
+    assert len(spread) == (0 if r.status in ("optimal", "almost_optimal") else 1)

@@ -197,26 +197,6 @@ pub(crate) fn load_report(path: &PathBuf) -> Result<grasp_torque::Loaded> {
     Ok(loaded)
 }
 
-/// The model's decisions a report should state: each joint whose row of Jᵀ it made
-/// zero ([`grasp_torque::GraspModel::zeroed_joints`]).
-pub(crate) fn model_warnings(qp: &grasp_torque::TorqueQp) -> Vec<String> {
-    let model = &qp.model;
-    model
-        .zeroed_joints
-        .iter()
-        .map(|z| {
-            format!(
-                "{}: its row of Jᵀ is at most {:.1e} of {}'s on the contacts it touches, within the rank tolerance ({:.0e}), and the model makes it zero: its torque is 0 (less any passive torque), and Jᵀ f matches it only to that tolerance of {}'s. Where the two torques are in units far apart, give them in nearer ones",
-                model.joint_name(z.joint),
-                z.ratio,
-                model.joint_name(z.against),
-                model.rank_tolerance,
-                model.joint_name(z.against),
-            )
-        })
-        .collect()
-}
-
 /// Standard output could not be written.
 #[derive(Debug)]
 pub(crate) struct OutputError(pub(crate) std::io::Error);

@@ -56,7 +56,8 @@ pub(crate) fn run(args: &SolveArgs) -> Result<u8> {
     };
     solver.solve(&problem.wrench, &warm)?;
     let mut sol = solver.solution().clone();
-    sol.warnings.extend(super::model_warnings(solver.problem()));
+    sol.warnings
+        .extend(solver.problem().model.zeroed_joint_warnings());
     let sol = &sol;
     for w in &sol.warnings {
         eprintln!("warning: {w}");

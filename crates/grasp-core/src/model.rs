@@ -1152,6 +1152,24 @@ impl GraspModel {
         6 + self.unactuated.nrows() + j
     }
 
+    /// A warning per joint of [`Self::zeroed_joints`], for a report: its ratio, the
+    /// joint it is measured against, and what follows. (Not on every solve's answer:
+    /// they are the model's, and a control loop's answers do not allocate.)
+    pub fn zeroed_joint_warnings(&self) -> Vec<String> {
+        self.zeroed_joints
+            .iter()
+            .map(|z| {
+                let against = self.joint_name(z.against);
+                format!(
+                    "{}: its row of Jᵀ is at most {:.1e} of {against}'s on the contacts it touches, within the rank tolerance ({:.0e}), and the model makes it zero: its torque is 0 (less any passive torque), and Jᵀ f matches it only to that tolerance of {against}'s. Where the two torques are in units far apart, give them in nearer ones",
+                    self.joint_name(z.joint),
+                    z.ratio,
+                    self.rank_tolerance,
+                )
+            })
+            .collect()
+    }
+
     /// The torques' scales in the objective, `√w_j` times their row's reach
     /// ([`Self::row_reach`]: what a unit force does to torque j), and the largest over
     /// the smallest nonzero one, `(largest j, smallest j, ratio)`; None where no two
