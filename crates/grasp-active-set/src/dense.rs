@@ -78,9 +78,23 @@ pub(crate) fn schur(
 /// n × n, lower triangle, each diagonal entry stored as its reciprocal): the factor
 /// of a product that is never formed. Each row of R is signed so that its diagonal
 /// is positive. False if a column is (numerically) dependent on those before it.
-pub(crate) fn qr_factor(a: &mut [f64], rows: usize, n: usize, l: &mut [f64]) -> bool {
+///
+/// Each reflector is applied a row at a time (its products with every later column
+/// summed along the rows, then each row updated), so that both passes run along
+/// contiguous rows and vectorise; each entry sees the same operations in the same
+/// order as column by column, which strode down the matrix and was 57 % of a large
+/// grasp's exact solve (22 contacts, 64 free torques, 259 rows: 15 million
+/// instructions a factor for 2.5 million flops).
+///
+/// The first `top` rows (at most n) are diagonal, as `[√P; W⁻¹G]`'s are: row i < top
+/// has no entry but column i, and reflectors before the i-th leave it so (their
+/// vectors are zero there), so reflector j skips rows j + 1 to top − 1.
+pub(crate) fn qr_factor(a: &mut [f64], rows: usize, n: usize, top: usize, l: &mut [f64]) -> bool {
     for j in 0..n {
-        let norm2: f64 = (j..rows).map(|i| a[i * n + j] * a[i * n + j]).sum();
+        // The rows reflector j moves: j, then `rest..`.
+        let rest = (j + 1).max(top);
+        let below = |i: usize| a[i * n + j] * a[i * n + j];
+        let norm2: f64 = std::iter::once(j).chain(rest..rows).map(below).sum();
         let norm = norm2.sqrt();
         if norm.is_nan() || norm == 0.0 || !norm.is_finite() {
             return false;
@@ -92,11 +106,29 @@ pub(crate) fn qr_factor(a: &mut [f64], rows: usize, n: usize, l: &mut [f64]) -> 
         let v0 = x0 - alpha;
         let vtv = norm2 - x0 * x0 + v0 * v0;
         a[j * n + j] = v0;
-        for k in j + 1..n {
-            let d: f64 = (j..rows).map(|i| a[i * n + j] * a[i * n + k]).sum();
-            let f = 2.0 * d / vtv;
-            for i in j..rows {
-                a[i * n + k] -= f * a[i * n + j];
+        // f_k = 2 vᵀa_k / vᵀv for the later columns, in `l`'s first row (written last).
+        let f = &mut l[j + 1..n];
+        let (pivot, others) = a[j * n..rows * n].split_at_mut(n);
+        let others = &mut others[(rest - j - 1) * n..];
+        // (-0.0 + v x: the first term as a sum's.)
+        for (f, x) in f.iter_mut().zip(&pivot[j + 1..]) {
+            *f = -0.0 + v0 * x;
+        }
+        for row in others.chunks_exact(n) {
+            let v = row[j];
+            for (f, x) in f.iter_mut().zip(&row[j + 1..]) {
+                *f += v * x;
+            }
+        }
+        f.iter_mut().for_each(|f| *f = 2.0 * *f / vtv);
+        for (x, f) in pivot[j + 1..].iter_mut().zip(&*f) {
+            *x -= f * v0;
+        }
+        for row in others.chunks_exact_mut(n) {
+            let (head, tail) = row.split_at_mut(j + 1);
+            let v = head[j];
+            for (x, f) in tail.iter_mut().zip(&*f) {
+                *x -= f * v;
             }
         }
         a[j * n + j] = alpha;
@@ -141,7 +173,7 @@ mod tests {
         let mut chol = m.clone();
         assert!(cholesky(&mut chol, n));
         let (mut q, mut l) = (a.clone(), vec![0.0; n * n]);
-        assert!(qr_factor(&mut q, rows, n, &mut l));
+        assert!(qr_factor(&mut q, rows, n, 0, &mut l));
         for i in 0..n {
             for j in 0..=i {
                 let (c, r) = (chol[i * n + j], l[i * n + j]);
@@ -168,7 +200,7 @@ mod tests {
             stack[j * n + j] = 2f64.sqrt();
             stack[n * n + j] = t * g[j];
         }
-        assert!(qr_factor(&mut stack, n + 1, n, &mut l));
+        assert!(qr_factor(&mut stack, n + 1, n, n, &mut l));
         let b = [1.0, 2.0, -1.0, 0.5];
         let x = solve(&l, n, &b);
         let (gb, gg): (f64, f64) = (

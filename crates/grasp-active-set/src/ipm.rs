@@ -680,7 +680,7 @@ impl Ipm {
                 }
             }
         }
-        qr_factor(a, rows, n, &mut ws.m)
+        qr_factor(a, rows, n, n, &mut ws.m)
     }
 
     /// The search direction for the current residuals and `d_s` in `t1`:
