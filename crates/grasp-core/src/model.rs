@@ -1171,24 +1171,31 @@ impl GraspModel {
     }
 
     /// The torques' scales in the objective, `√w_j` times their row's reach
-    /// ([`Self::row_reach`]: what a unit force does to torque j), and the largest over
-    /// the smallest nonzero one, `(largest j, smallest j, ratio)`; None where no two
-    /// joints carry force. Far apart (a joint in a unit 1e8 times another's without
-    /// the weight that undoes it, or moment arms 1e-8 of the others'), the smaller
-    /// torques are at the rounding of the larger: docs/solver.md, "Limits".
-    pub fn torque_spread(&self) -> Option<(usize, usize, f64)> {
-        let scale = |j: usize| self.weights[j].sqrt() * self.row_reach[self.torque_row(j)];
-        let (mut hi, mut lo) = (None::<usize>, None::<usize>);
-        for j in (0..self.joints()).filter(|&j| scale(j) > 0.0) {
-            if hi.is_none_or(|h| scale(j) > scale(h)) {
-                hi = Some(j);
+    /// ([`Self::row_reach`]: what a unit force does to torque j): the largest and the
+    /// smallest nonzero one, each `(joint, scale)`; None where fewer than two joints
+    /// carry force. Far apart (a joint in a unit 1e8 times another's without the weight
+    /// that undoes it, or moment arms 1e-8 of the others'), the smaller torques are at
+    /// the rounding of the larger: docs/solver.md, "Limits".
+    pub fn torque_spread(&self) -> Option<[(usize, f64); 2]> {
+        let scales = (0..self.joints())
+            .map(|j| {
+                (
+                    j,
+                    self.weights[j].sqrt() * self.row_reach[self.torque_row(j)],
+                )
+            })
+            .filter(|&(_, s)| s > 0.0);
+        let (mut hi, mut lo) = (None::<(usize, f64)>, None::<(usize, f64)>);
+        for (j, s) in scales {
+            if hi.is_none_or(|h| s > h.1) {
+                hi = Some((j, s));
             }
-            if lo.is_none_or(|l| scale(j) < scale(l)) {
-                lo = Some(j);
+            if lo.is_none_or(|l| s < l.1) {
+                lo = Some((j, s));
             }
         }
         let (hi, lo) = (hi?, lo?);
-        (hi != lo).then(|| (hi, lo, scale(hi) / scale(lo)))
+        (hi.0 != lo.0).then_some([hi, lo])
     }
 
     /// Row i of `[G; E; Jᵀ]` (the order of [`Self::row_reach`] and [`Self::row_scale`]).

@@ -650,8 +650,8 @@ pub fn complete_deferred(solver: &mut dyn TorqueSolver, wrench: &[f64; 6], out: 
 const TORQUE_SPREAD_NOTE: f64 = 1e4;
 
 /// A warning on an answer that is not one (`numerical_failure`, `iteration_limit`)
-/// where the torques' scales are more than [`TORQUE_SPREAD_NOTE`] apart: the likely
-/// cause, and what removes it. (Only on those statuses: no cost to a solve that
+/// where the torques' scales are more than [`TORQUE_SPREAD_NOTE`] apart: a likely
+/// cause, and what avoids it. (Only on those statuses: no cost to a solve that
 /// answers.)
 #[cold]
 fn note_torque_spread(qp: &TorqueQp, out: &mut Solution) {
@@ -662,14 +662,15 @@ fn note_torque_spread(qp: &TorqueQp, out: &mut Solution) {
         return;
     }
     let model = &*qp.model;
-    if let Some((hi, lo, ratio)) = model.torque_spread().filter(|s| s.2 > TORQUE_SPREAD_NOTE) {
-        let scale = |j: usize| model.weights[j].sqrt() * model.row_reach[model.torque_row(j)];
+    let Some([(hi, big), (lo, small)]) = model.torque_spread() else {
+        return;
+    };
+    if big > TORQUE_SPREAD_NOTE * small {
         out.warnings.push(format!(
-            "the torques' scales in the objective (√w_j Σ_i |Jᵀ_ji|, mz as mz/mu_torsion) are {ratio:.1e} apart: {} at {:.3e}, {} at {:.3e}; the smaller torques are then near the rounding of the larger, a common cause of this status (docs/solver.md, \"Limits\"): torques in comparable units, or weights that balance the scales, avoid it",
+            "the torques' scales in the objective (√w_j Σ_i |Jᵀ_ji|, mz as mz/mu_torsion) are {:.1e} apart: {} at {big:.3e}, {} at {small:.3e}; the smaller torques are then near the rounding of the larger, a common cause of this status (docs/solver.md, \"Limits\"): torques in comparable units, or weights that balance the scales, avoid it",
+            big / small,
             model.joint_name(hi),
-            scale(hi),
             model.joint_name(lo),
-            scale(lo),
         ));
     }
 }
