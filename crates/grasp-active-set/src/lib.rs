@@ -42,6 +42,18 @@ use factor::Factor;
 /// The factor on [`ActiveSetSettings::feasibility_tolerance`] of a solve's first run.
 pub const TIGHT: f64 = 1e-2;
 
+/// A solve's runs ([`Engine::runs`]), in the order they are tried.
+#[derive(Clone, Copy, Debug, PartialEq, PartialOrd)]
+enum Run {
+    /// Rows hold to [`TIGHT`] times the feasibility tolerance.
+    Tight,
+    /// Rows hold to the feasibility tolerance.
+    Loose,
+    /// As `Loose`, with each row relaxed by `share` (at most 1) of the rounding it
+    /// carries at `‖y‖ = size` ([`Engine::noise`]).
+    Rounding { size: f64, share: f64 },
+}
+
 /// How a cold solve finds its first feasible point (Step 1).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Phase1 {
@@ -73,7 +85,8 @@ pub struct ActiveSetSettings {
     /// its torque stays small, so that 1e-9 let a force miss its face by 19 N. Where
     /// that finds no optimum (on a grasp so ill-conditioned that rounding exceeds it, or
     /// an infeasibility proven only by a row within this tolerance), the solve runs
-    /// again at this one.
+    /// again at this one; where a run proves infeasibility by less than the rounding
+    /// its rows carry, again with each row relaxed by its rounding.
     pub feasibility_tolerance: f64,
     /// A multiplier counts as non-negative above `−multiplier_tolerance · scale`.
     /// Default 1e-10.
@@ -273,6 +286,12 @@ struct Engine {
     red_row: Vec<usize>,
     /// `‖(H D⁻¹ N)_i‖` of each reduced row.
     nu: Vec<f64>,
+    /// The rounding each reduced row's value `a_r · y − b_r` carries, in units of ε:
+    /// `‖(H D⁻¹)_i‖ / ν_r` per unit of y and of u0 (the row's entries before the
+    /// null space cancelled them to `ν_r`: a joint with moment arms 1e-6 of the others'
+    /// makes them 1e6 times larger), and the normalised size of the terms behind its
+    /// constant. See [`Engine::noise`].
+    noise: Vec<[f64; 2]>,
     /// `ĉ = c0n − mn · w`, with mn (R × 6) column-major like `a_cols`.
     c0n: Vec<f64>,
     /// The reduced rows before the torque limits' (the view's last rows): those whose
@@ -705,6 +724,7 @@ impl Engine {
         let mut a_cols = vec![0.0; nr * k];
         let mut mn_cols = vec![0.0; nr * 6];
         let mut c0n = Vec::with_capacity(nr);
+        let mut noise = Vec::with_capacity(nr);
         // (By the reciprocal: a division per row, not per entry, which was a tenth of
         // the build. Each entry moves by an ulp at most. A kept row's norm is above
         // 1e-13 of the largest, which is at least about 1e-12 wherever Jᵀ's entries
@@ -718,6 +738,7 @@ impl Engine {
                 mn_cols[j * nr + r] = v * inv;
             }
             c0n.push(qp.c0[i] * inv);
+            noise.push([own[i] * inv, qp.c0_terms[i] * inv]);
         }
         write_columns(&a, &mut a_cols, nr);
         let fixed_c0 = fixed.iter().map(|&i| qp.c0[i]).collect();
@@ -759,6 +780,7 @@ impl Engine {
             h_row,
             red_row,
             nu,
+            noise,
             c0n,
             mn_cols,
             fixed,
@@ -985,43 +1007,84 @@ impl Engine {
 impl Engine {
     /// The solve's runs from `warm` ([`Self::solve`]), every row relaxed by `relax`:
     /// first to TIGHT times the feasibility tolerance; again at the tolerance itself
-    /// where that run finds no optimum and a looser one might (ActiveSetSettings).
-    /// Returns how they ended and the iterations of both.
+    /// where that run finds no optimum and a looser one might (ActiveSetSettings); and
+    /// again with every row relaxed by the rounding it carries ([`Self::noise`]) where
+    /// a run proved infeasibility only by a violation within its rows' rounding.
+    /// Returns how they ended and the iterations of all.
     fn runs(&mut self, w: &[f64; 6], warm: &WarmStart<'_>, hot: bool, relax: f64) -> (End, usize) {
-        let (mut tight, mut iterations) = (true, 0);
-        let end = loop {
-            self.set_b(w);
-            let ws = &mut self.ws;
-            if relax > 0.0 {
-                ws.b.iter_mut().for_each(|v| *v -= relax);
-            }
-            ws.u.iter_mut().for_each(|v| *v = 0.0);
-            add_columns(&mut ws.u, &self.pu_cols, w, 1.0);
+        let (mut next, mut first, mut iterations) = (Some(Run::Tight), true, 0);
+        let mut end = End::Numerical("no run");
+        while let Some(run) = next.take() {
+            self.set_rows(w, relax, run);
             // Starting point y0.
+            let ws = &mut self.ws;
             ws.z.iter_mut().for_each(|v| *v = 0.0);
             ws.e.iter_mut().for_each(|v| *v = 0.0);
-            if !hot || !tight {
+            if !hot || !first {
                 ws.in_set.iter_mut().for_each(|v| *v = false);
                 ws.factor.clear();
             }
             ws.reusable = true;
-            let mut state = Iter::new(self, tight);
-            // The iteration cap is on both runs together.
+            let tight = run == Run::Tight;
+            let mut state = Iter::new(self, tight, w);
+            // The iteration cap is on all runs together.
             state.iterations = iterations;
-            let end = state.run(warm);
+            end = state.run(warm);
             iterations = state.iterations;
-            let again = tight
-                && match end {
-                    End::Optimal | End::IterationLimit(_) => false,
-                    End::Infeasible(_) => state.within_loose,
-                    End::Numerical(_) => true,
-                };
-            if !again {
-                break end;
+            next = match end {
+                End::Optimal | End::IterationLimit(_) => None,
+                End::Infeasible(_) if !matches!(run, Run::Rounding { .. }) => {
+                    state.undecided.filter(|n| *n > run)
+                }
+                End::Infeasible(_) => None,
+                End::Numerical(_) => tight.then_some(Run::Loose),
+            };
+            first = false;
+            if let (End::Optimal, Run::Rounding { .. }) = (&end, run) {
+                // The key set on the rows as given, where its point holds them (σ
+                // within the tolerance, not the relaxation, of the optimum).
+                self.set_rows(w, relax, Run::Loose);
+                if !matches!(Iter::new(self, false, w).finish(), End::Optimal) {
+                    self.set_rows(w, relax, run);
+                    Iter::new(self, false, w).finish();
+                }
             }
-            tight = false;
-        };
+        }
         (end, iterations)
+    }
+
+    /// `b` and `u0` for a run of [`Self::runs`] at `w`, every row relaxed by `relax`
+    /// and, in a [`Run::Rounding`], by its rounding.
+    fn set_rows(&mut self, w: &[f64; 6], relax: f64, run: Run) {
+        self.set_b(w);
+        let ws = &mut self.ws;
+        if relax > 0.0 {
+            ws.b.iter_mut().for_each(|v| *v -= relax);
+        }
+        ws.u.iter_mut().for_each(|v| *v = 0.0);
+        add_columns(&mut ws.u, &self.pu_cols, w, 1.0);
+        if let Run::Rounding { size, share } = run {
+            let u0 = grasp_core::matrix::norm2(&self.ws.u);
+            for r in 0..self.ws.b.len() {
+                self.ws.b[r] -= share * self.noise(r, w, size + u0);
+            }
+        }
+    }
+
+    /// The rounding that row `r`'s value `a_r · y − b_r` carries at `‖y‖ + ‖u0‖ =
+    /// size`: the bound `m ε` on a product of `m` terms (Higham, "Accuracy and Stability
+    /// of Numerical Algorithms", §3.1) times those behind its entries and constant,
+    /// `H D⁻¹`'s, `c0`'s and the wrench maps', which the null space and the passive
+    /// torques cancel. (Ten times it took proofs by 0.7 of it that the exact cones and
+    /// cvxpy confirm, on rows whose entries had cancelled from 1e15 times their norm.)
+    fn noise(&self, r: usize, w: &[f64; 6], size: f64) -> f64 {
+        let nr = self.nu.len();
+        let wrench: f64 = (0..6)
+            .map(|j| (self.mn_cols[j * nr + r] * w[j]).abs())
+            .sum();
+        let [per_y, c0] = self.noise[r];
+        let terms = per_y * size + c0 + wrench;
+        self.m as f64 * f64::EPSILON * terms
     }
 
     /// `b = ĉ(w)`, the rows' right-hand side.
@@ -1103,7 +1166,7 @@ impl Engine {
         out.iterations += iterations;
         if matches!(end, End::Optimal) {
             self.set_b(w);
-            let polished = Iter::new(self, false).finish();
+            let polished = Iter::new(self, false, w).finish();
             let drop = (sigma - self.sigma()) / sigma;
             if matches!(polished, End::Optimal)
                 && self.amplification() <= AMPLIFIED
@@ -1180,13 +1243,15 @@ struct Iter<'s> {
     tight: bool,
     /// The feasibility tolerance of this run, relative to the scale.
     feasibility: f64,
-    /// Set with `infeasible` (or an elastic proof) when the row, or the elastic
-    /// variable, was violated by no more than the feasibility tolerance itself.
-    within_loose: bool,
+    /// Set with `infeasible` (or an elastic proof) when the proof's violation does not
+    /// decide: the run that may ([`Iter::undecided_run`]).
+    undecided: Option<Run>,
+    /// The wrench, for the rounding of the rows' constants.
+    w: [f64; 6],
 }
 
 impl<'s> Iter<'s> {
-    fn new(s: &'s mut Engine, tight: bool) -> Self {
+    fn new(s: &'s mut Engine, tight: bool, w: &[f64; 6]) -> Self {
         // A torque limit that y = 0 breaks (a range that excludes 0, or passive torques
         // beyond a limit) says how large the answer is; one that it meets does not.
         let scale = s.rhs_scale();
@@ -1203,7 +1268,8 @@ impl<'s> Iter<'s> {
             stalled: false,
             tight,
             feasibility,
-            within_loose: false,
+            undecided: None,
+            w: *w,
         }
     }
 
@@ -1217,9 +1283,38 @@ impl<'s> Iter<'s> {
         self.feasibility * self.scale.max(y)
     }
 
-    /// Whether a violation `v` is within the untightened feasibility tolerance.
-    fn loosely_within(&self, v: f64) -> bool {
-        self.tight && v <= self.feas_tol() / TIGHT
+    /// The run that may still find a point where this one proved infeasibility by the
+    /// violation `v` of a non-negative combination of rows (each row's multiplier in
+    /// `combination`, the others 0): one at the untightened tolerance where `v` is
+    /// within it, one with every row relaxed by its rounding where `v` is within the
+    /// combination's rounding ([`Engine::noise`]); `None` where `v` decides. (A joint
+    /// whose moment arms are 1e-6 of the others' leaves rows whose entries cancelled
+    /// from 1e6 times their norm: fuzz seed 246677, a grasp whose only admissible force
+    /// is zero, was infeasible by 2.5 times the tolerance in one system of units.)
+    fn undecided_run(
+        &self,
+        v: f64,
+        combination: impl Iterator<Item = (usize, f64)>,
+    ) -> Option<Run> {
+        // The combination is 0 in y (to its rounding): its rows' rounding enters at the
+        // size of a point that would hold them, the problem's scale, not at the
+        // iterate's, which a tightened run can take 1e9 times past it (fuzz seed 18013,
+        // whose proof by 1.5 times the scale this kept).
+        let size = self.scale;
+        let u0 = grasp_core::matrix::norm2(&self.s.ws.u);
+        let noise: f64 = combination
+            .map(|(r, c)| c.abs() * self.s.noise(r, &self.w, size + u0))
+            .sum();
+        if self.tight && v <= self.feas_tol() / TIGHT {
+            Some(Run::Loose)
+        } else {
+            // Relaxed by twice what undoes this proof: the answer moves with the
+            // relaxation, which need not be the whole bound.
+            (v <= noise).then_some(Run::Rounding {
+                size,
+                share: (2.0 * v / noise).min(1.0),
+            })
+        }
     }
 
     /// Adds row `i` to the key set; false when it depends on the rows already there.
@@ -1506,7 +1601,13 @@ impl<'s> Iter<'s> {
                 let full = t2 <= t1.0;
                 let step = if full { t2 } else { t1.0 };
                 if step.is_infinite() {
-                    self.within_loose = self.loosely_within(worst.0);
+                    // Row p plus the key set's rows times −(its direction's
+                    // multipliers), all non-negative, is 0 in y and `v` in b.
+                    let rows = self.s.ws.factor.rows();
+                    let key = (0..t)
+                        .filter(|&pos| rows[pos] != S_ROW)
+                        .map(|pos| (rows[pos], self.s.ws.factor.lambda(pos)));
+                    self.undecided = self.undecided_run(worst.0, key.chain([(p, 1.0)]));
                     return Err(p);
                 }
                 for pos in 0..t {
@@ -1625,7 +1726,19 @@ impl<'s> Iter<'s> {
                 // Stationary with s free: the penalty is too small, or no torque exists.
                 if increases == self.s.settings.penalty_increases {
                     return if self.s.ws.z[k] > self.feas_tol() {
-                        self.within_loose = self.loosely_within(self.s.ws.z[k]);
+                        // The key set's multipliers per unit of s's: the combination
+                        // of rows whose value proves s > 0.
+                        let ws = &self.s.ws;
+                        let rows = ws.factor.rows();
+                        let key = || {
+                            (0..rows.len())
+                                .filter(|&pos| rows[pos] != S_ROW)
+                                .map(|pos| (rows[pos], ws.factor.lambda(pos).max(0.0)))
+                        };
+                        let total: f64 = key().map(|(r, l)| l * ws.e[r]).sum();
+                        let per_s =
+                            key().map(|(r, l)| (r, if total > 0.0 { l / total } else { 0.0 }));
+                        self.undecided = self.undecided_run(ws.z[k], per_s);
                         End::Infeasible(None)
                     } else {
                         End::Numerical("the elastic variable would not leave the key set's span")

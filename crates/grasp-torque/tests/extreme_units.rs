@@ -604,3 +604,48 @@ fn a_grasp_without_an_answer_names_its_torque_spread() {
         );
     }
 }
+
+/// A grasp whose only admissible contact force is zero
+/// (`fixtures/fuzz/only-zero-force-admissible.json`, `fuzz_answers.py` seed 246677: the
+/// Allegro grasp unloaded, one contact's friction 0.026, joint 9's row of Jᵀ 7e-7 of
+/// the others'). No squeeze is admissible (cvxpy: the largest normal force of one is
+/// 3e-10 N), so the motors cancel the passive torques and σ* = Σ τ_p² (cvxpy's σ* in SI
+/// units and with lengths × 0.1, to 1e-13). The tiny row leaves rows of H whose
+/// entries cancelled from 1e6 times their norm in the free torques; with lengths 10
+/// times smaller the native solver proved the grasp infeasible by 2.5 times its
+/// feasibility tolerance, by a combination of such rows whose rounding is 5 times
+/// that. Such a proof now runs again with the rows relaxed by their rounding. The
+/// linear answer is σ* in every unit system; the exact one is never `infeasible`.
+#[test]
+fn a_grasp_held_only_by_zero_force_is_held_in_any_units() {
+    let p = fuzz_fixture("only-zero-force-admissible");
+    let tp = p.passive_torque.as_ref().unwrap();
+    let sigma_star: f64 = tp.iter().map(|t| t * t).sum();
+    for l in [1e-3, 0.0385, 0.1, 1.0, 10.0, 1e3] {
+        for f in [1e-3, 1.0, 67.6, 1e3] {
+            let q = grasp_testkit::rescale(&p, l, f);
+            let at = format!("lengths × {l:e}, forces × {f:e}");
+            let s = run(&q, Cones::Linear);
+            assert!(s.is_optimal(), "{at}: {:?} {:?}", s.status, s.reason);
+            // Rows hold to the feasibility tolerance, 1e-9 of the scale, after a
+            // relaxation of twice the proof's violation (2.5e-9 of it): σ moves by up
+            // to twice that, relative (measured: 2.2e-9 at most).
+            let sigma = sigma_back(&p, &s, l * f);
+            assert!(
+                (sigma - sigma_star).abs() <= 1.2e-8 * sigma_star,
+                "{at}: σ = {sigma} against {sigma_star}"
+            );
+            // The exact cones' optimum is the same (a zero force is in every cone):
+            // within the certificate's 2e-9 where it is `optimal`.
+            let e = run(&q, Cones::Exact);
+            assert_ne!(e.status, Status::Infeasible, "{at}: {:?}", e.reason);
+            if e.is_optimal() {
+                let sigma = sigma_back(&p, &e, l * f);
+                assert!(
+                    (sigma - sigma_star).abs() <= 2e-9 * sigma_star,
+                    "{at}: exact σ* = {sigma} against {sigma_star}"
+                );
+            }
+        }
+    }
+}
