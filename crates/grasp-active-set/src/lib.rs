@@ -1075,8 +1075,8 @@ impl Engine {
     /// size`: the bound `m ε` on a product of `m` terms (Higham, "Accuracy and Stability
     /// of Numerical Algorithms", §3.1) times those behind its entries and constant,
     /// `H D⁻¹`'s, `c0`'s and the wrench maps', which the null space and the passive
-    /// torques cancel. (Ten times it took proofs by 0.7 of it that the exact cones and
-    /// cvxpy confirm, on rows whose entries had cancelled from 1e15 times their norm.)
+    /// torques cancel. (Ten times it undid a proof that the exact cones and cvxpy
+    /// confirm, `fuzz_answers.py` seed 34939, docs/solver.md §4.)
     fn noise(&self, r: usize, w: &[f64; 6], size: f64) -> f64 {
         let nr = self.nu.len();
         let wrench: f64 = (0..6)
@@ -1290,7 +1290,7 @@ impl<'s> Iter<'s> {
     /// combination's rounding ([`Engine::noise`]); `None` where `v` decides. (A joint
     /// whose moment arms are 1e-6 of the others' leaves rows whose entries cancelled
     /// from 1e6 times their norm: fuzz seed 246677, a grasp whose only admissible force
-    /// is zero, was infeasible by 2.5 times the tolerance in one system of units.)
+    /// is zero, was infeasible in one system of units.)
     fn undecided_run(
         &self,
         v: f64,
@@ -1298,8 +1298,8 @@ impl<'s> Iter<'s> {
     ) -> Option<Run> {
         // The combination is 0 in y (to its rounding): its rows' rounding enters at the
         // size of a point that would hold them, the problem's scale, not at the
-        // iterate's, which a tightened run can take 1e9 times past it (fuzz seed 18013,
-        // whose proof by 1.5 times the scale this kept).
+        // iterate's, which a tightened run can take far past it: there it undid the
+        // proof on fuzz seed 18013 (`fixtures/fuzz/inscribed-optimum-outside.json`).
         let size = self.scale;
         let u0 = grasp_core::matrix::norm2(&self.s.ws.u);
         let noise: f64 = combination

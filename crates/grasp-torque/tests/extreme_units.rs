@@ -612,9 +612,8 @@ fn a_grasp_without_an_answer_names_its_torque_spread() {
 /// 3e-10 N), so the motors cancel the passive torques and σ* = Σ τ_p² (cvxpy's σ* in SI
 /// units and with lengths × 0.1, to 1e-13). The tiny row leaves rows of H whose
 /// entries cancelled from 1e6 times their norm in the free torques; with lengths 10
-/// times smaller the native solver proved the grasp infeasible by 2.5 times its
-/// feasibility tolerance, by a combination of such rows whose rounding is 5 times
-/// that. Such a proof now runs again with the rows relaxed by their rounding. The
+/// times smaller the native solver proved the grasp infeasible by a combination of
+/// such rows, within their rounding. Such a proof now runs again with the rows relaxed by their rounding. The
 /// linear answer is σ* in every unit system; the exact one is never `infeasible`.
 #[test]
 fn a_grasp_held_only_by_zero_force_is_held_in_any_units() {
@@ -628,8 +627,8 @@ fn a_grasp_held_only_by_zero_force_is_held_in_any_units() {
             let s = run(&q, Cones::Linear);
             assert!(s.is_optimal(), "{at}: {:?} {:?}", s.status, s.reason);
             // Rows hold to the feasibility tolerance, 1e-9 of the scale, after a
-            // relaxation of twice the proof's violation (2.5e-9 of it): σ moves by up
-            // to twice that, relative (measured: 2.2e-9 at most).
+            // relaxation of at most their rounding (m ε times 1e6 here, about 3e-9 of
+            // it): σ moves by up to twice their sum, 8e-9, relative.
             let sigma = sigma_back(&p, &s, l * f);
             assert!(
                 (sigma - sigma_star).abs() <= 1.2e-8 * sigma_star,
