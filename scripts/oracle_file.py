@@ -5,7 +5,8 @@ the file alone: an oracle for a grasp the project found hard (tests cite its fig
 It solves the problem in the contact forces f: `G f = w`, each contact's force in its
 exact cone (FPC `fz ≥ 0`; PCwF `‖(fx, fy)‖ ≤ mu fz`; SFCl `‖(fx, fy)‖/mu + |mz|/mu_torsion
 ≤ fz`; SFCe `‖(fx/mu, fy/mu, mz/mu_torsion)‖ ≤ fz`), minimum normal forces, torque
-limits on `τ = Jᵀ f`, and minimises `Σ w_j τ_j²`. That is the project's problem only
+limits on `τ = Jᵀ f − τ_p` (τ_p the file's `passive_torque`, zero without it), and
+minimises `Σ w_j τ_j²`. That is the project's problem only
 where `[G; Jᵀ]` has full column rank (f is then fixed by w and τ, so no model of the
 passive internal forces enters), which it checks. Clarabel runs at 1e-10, then again
 with σ divided by the first answer (its absolute tolerances then count relative to
@@ -28,8 +29,12 @@ def main():
     s = np.linalg.svd(np.vstack([G, J]), compute_uv=False)
     if s[-1] <= 1e-9 * s[0] or G.shape[0] + m < n:
         sys.exit("[G; Jᵀ] is rank-deficient: the passive internal forces are a modelling choice")
+    if p.get("transmission"):
+        sys.exit("a transmission: the oracle solves in joint torques only")
+    # Passive joint torques: Jᵀ f = τ + τ_p, the motors' τ what σ weighs and limits bound.
+    passive = np.array(p.get("passive_torque") or [0.0] * m, float)
     f = cp.Variable(n)
-    tau = J @ f
+    tau = J @ f - passive
     cons = [G @ f == w]
     fmin = p.get("min_normal_force") or 0.0
     off = 0
@@ -67,7 +72,7 @@ def main():
         if prob.status != "optimal":
             print(prob.status)
             return
-        sigma = float(np.sum(weights * (J @ f.value) ** 2))
+        sigma = float(np.sum(weights * (J @ f.value - passive) ** 2))
     print(f"{sigma:.12e}")
 
 

@@ -187,6 +187,29 @@ impl Factor {
         }
     }
 
+    /// `Rᵀ u1 = rhs` over the key set (forward substitution).
+    fn forward(&mut self, rhs: impl Fn(usize) -> f64) {
+        let n = self.n;
+        for i in 0..self.rows.len() {
+            let col = &self.r[i * n..i * n + i + 1];
+            let s = rhs(self.rows[i]) - dot(&col[..i], &self.u1[..i]);
+            self.u1[i] = s / col[i];
+        }
+    }
+
+    /// The least-norm `z` with `a_i·z = rhs(i)` over the key set, `Q1 R⁻ᵀ rhs`; the
+    /// multipliers of the last [`Self::solve`] are kept.
+    pub(crate) fn least_norm(&mut self, rhs: impl Fn(usize) -> f64, z: &mut [f64]) {
+        let n = self.n;
+        self.forward(rhs);
+        z.iter_mut().for_each(|x| *x = 0.0);
+        for (j, &u) in self.u1[..self.rows.len()].iter().enumerate() {
+            for (x, qv) in z.iter_mut().zip(&self.q[j * n..(j + 1) * n]) {
+                *x += u * qv;
+            }
+        }
+    }
+
     /// Minimises `½‖z‖² + penalty·z[n−1]` subject to `a_i·z = rhs(i)` for the key set:
     /// the minimiser goes to `zstar`, the multipliers to [`Self::lambda`]. With
     /// `last_fixed` (z[n−1] is pinned by the key set) the penalty term of z* is exactly
@@ -200,12 +223,7 @@ impl Factor {
     ) {
         let (n, t) = (self.n, self.rows.len());
         let last = n - 1;
-        // Rᵀ u1 = b_W (forward substitution).
-        for i in 0..t {
-            let col = &self.r[i * n..i * n + i + 1];
-            let s = rhs(self.rows[i]) - dot(&col[..i], &self.u1[..i]);
-            self.u1[i] = s / col[i];
-        }
+        self.forward(rhs);
         // z* = Q1 u1 − penalty · Q2 Q2ᵀ e_last.
         zstar.iter_mut().for_each(|x| *x = 0.0);
         for j in 0..n {

@@ -232,6 +232,36 @@ impl LeastDistance<'_> {
         out
     }
 
+    /// `H_i · x` and the size of its terms (`Σ |h_ij x_j|`, through the factors `Σ_t
+    /// |face_t| Σ_j |z2_tj x_j|`), through [`RowFactors`] when H has them: `face ·
+    /// (Z2 x)` on the contact's rows of Z2, so that the product keeps the rounding of
+    /// its own terms.
+    pub fn row_value(&self, i: usize, x: &[f64]) -> (f64, f64) {
+        let terms = |row: &[f64]| -> (f64, f64) {
+            row.iter()
+                .zip(x)
+                .fold((0.0, 0.0), |(v, t), (a, b)| (v + a * b, t + (a * b).abs()))
+        };
+        let f = match self.h {
+            InequalityRows::Formed(h) => return terms(h.row(i)),
+            InequalityRows::Factored(f) => f,
+        };
+        if let RowId::TorqueLimit { joint, upper } = self.rows[i] {
+            let v = if upper { -x[joint] } else { x[joint] };
+            return (v, v.abs());
+        }
+        let Some((c, repr)) = (f.contacts.iter().zip(f.cones))
+            .find(|(c, _)| (c.first_row..c.first_row + c.rows).contains(&i))
+        else {
+            return (0.0, 0.0);
+        };
+        let (face, dim) = face_row(repr, &c.model, i - c.first_row);
+        (0..dim).fold((0.0, 0.0), |(v, t), k| {
+            let (zv, zt) = terms(f.z2.row(c.offset + k));
+            (v + face[k] * zv, t + face[k].abs() * zt)
+        })
+    }
+
     /// The largest Euclidean norm of a row of `H diag(col_scale)`: through [`RowFactors`]
     /// from each contact's Gram matrix of its scaled rows of Z2 (at most 4 × 4), so
     /// without H.
