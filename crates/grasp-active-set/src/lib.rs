@@ -1248,8 +1248,8 @@ impl Engine {
                 }
             }
             // A residual within its rounding, or too near it for the step to be
-            // accurate, is left: rows whose constants cancel from 1e8 (seed 246300)
-            // gave steps of noise, and σ 2e-8 off the key set's optimum.
+            // accurate, is left: on rows whose constants cancel from 1e8 (seed
+            // 246300) the steps were of that noise, and the core's check refused them.
             if largest <= REFINABLE * noise {
                 return;
             }
