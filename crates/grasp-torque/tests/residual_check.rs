@@ -342,28 +342,29 @@ fn an_iterate_stopped_short_states_the_bound_its_gap_gives() {
 /// order; it now refines them in τ. `scripts/key_set_optimum.py` (50 digits, on the
 /// exported QP and the answer's key set) gives 23.81370850096063 at N = 8, and within
 /// 6e-14 of it at N = 16, 32 and 64 (their rows' own rounding): each answer must be
-/// within 1e-12 of it, a hundred times that spread, cold and warm.
+/// within 1e-12 of it, a hundred times that spread, cold and warm, and with the
+/// wrench scaled by 1e6 and 1e-6 (σ by their squares).
 #[test]
 fn a_key_set_of_nearly_opposite_faces_is_solved_to_its_terms() {
     let p = fuzz_fixture("opposite-faces-beside-a-scaled-joint");
+    // The rows' constants are linear in w, so σ scales as its square.
     for sides in [8, 16, 32, 64] {
-        let mut q = p.clone();
-        q.linearization.sides = sides;
-        let mut solver = GraspSolver::new(&q, &SolverConfig::default()).unwrap();
-        // Cold, then warm from that answer (a hot start: the same key set).
-        for run in ["cold", "warm"] {
-            let s = solver.resolve(&q.wrench).unwrap();
-            assert_eq!(
-                s.status,
-                Status::Optimal,
-                "N = {sides}, {run}: {:?}",
-                s.reason
-            );
-            assert!(
-                (s.objective - 23.81370850096063).abs() <= 1e-12 * s.objective,
-                "N = {sides}, {run}: σ {}",
-                s.objective
-            );
+        for k in [1.0, 1e6, 1e-6] {
+            let mut q = p.clone();
+            q.linearization.sides = sides;
+            q.wrench.iter_mut().for_each(|v| *v *= k);
+            let mut solver = GraspSolver::new(&q, &SolverConfig::default()).unwrap();
+            // Cold, then warm from that answer (a hot start: the same key set).
+            for run in ["cold", "warm"] {
+                let s = solver.resolve(&q.wrench).unwrap();
+                let at = format!("N = {sides}, wrench × {k:e}, {run}");
+                assert_eq!(s.status, Status::Optimal, "{at}: {:?}", s.reason);
+                let sigma = s.objective / (k * k);
+                assert!(
+                    (sigma - 23.81370850096063).abs() <= 1e-12 * sigma,
+                    "{at}: σ {sigma}"
+                );
+            }
         }
     }
 }
