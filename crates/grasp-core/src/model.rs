@@ -695,9 +695,30 @@ fn metric_free_rank<'a>(
 /// equilibrated torques) at or below this times the joint count is rounding of a zero
 /// row, a joint whose torque the equalities pin ([`GraspModel::eq_null`]). Pinned
 /// joints' rows come out at 1e-17 to 1e-16; a thumb 1e11 m from the palm (its rows
-/// of Jᵀ 1e12 times the others') has rows of 7e-14 to 2e-13 that the weighting makes
-/// as large as the rest, so the bound stays below those.
+/// of Jᵀ 1e12 times the others') has rows of 2e-13 to 7e-13 that the weighting makes
+/// as large as the rest, so the bound stays below those. A row above it but within the
+/// rank tolerance is rounding too where the joint's own row of A lies in the span of
+/// [G; E]'s to within this times the force components (`pinned_by_its_row`).
 pub const PINNED: f64 = 10.0 * f64::EPSILON;
+
+/// Whether `row` (a joint's row of A, columns scaled by `dinv`) lies in the span of the
+/// orthonormal columns of `basis` (the rows of [G; E], likewise scaled) to within
+/// `tol` of its own norm: a joint whose torque the wrench alone fixes, up to the
+/// rounding its row was formed with. (A thumb 1e11 m from the palm has rows 3.5e-13 to
+/// 8.3e-13 of theirs out of that span, its torques' own response to the forces, 17
+/// times the bound at least: not pinned.)
+fn pinned_by_its_row(basis: &Matrix, row: &[f64], dinv: &[f64], tol: f64) -> bool {
+    let a: Vec<f64> = row.iter().zip(dinv).map(|(a, d)| a * d).collect();
+    let norm = norm2(&a);
+    let mut rest = a.clone();
+    for c in 0..basis.ncols() {
+        let along: f64 = (0..a.len()).map(|i| basis[(i, c)] * a[i]).sum();
+        for (i, r) in rest.iter_mut().enumerate() {
+            *r -= along * basis[(i, c)];
+        }
+    }
+    norm > 0.0 && norm2(&rest) <= tol * norm
+}
 
 /// Largest ratio between the norms of two rows of `[G; Jᵀ]` for which `euclidean`
 /// keeps the plain A⁺: beyond it, its rounding grows with the ratio. Real hands in SI
@@ -993,12 +1014,30 @@ impl GraspModel {
                 // torques) such a row grows as g does, and a joint whose moment arms
                 // are 1e6 times the others' had a torque limit judged on a direction
                 // of 1e-11 (fuzz seed 2866: a feasible pinch called infeasible).
+                // A row above that bound is still one of rounding where the joint's
+                // row of A lies in the span of [G; E]'s to within rounding of its own
+                // (`pinned_by_its_row`): the decomposition's rounding, amplified by
+                // A's conditioning, left rows of 3.2e-14 and 1.4e-13 on joints the data
+                // pin to 1.7e-16 and 2.4e-16 of their rows (`fuzz_answers.py
+                // pinned-limits` seeds 3141 and 3463: a limit at the pinned torque
+                // raised σ by 2e-5 or made the grasp infeasible).
                 let mut null = dc.null_basis;
                 let pinned = PINNED * m as f64;
+                let mut span = None;
                 for j in 0..m {
-                    let row = null.row_mut(j);
-                    if crate::matrix::norm2(row) <= pinned {
-                        row.iter_mut().for_each(|v| *v = 0.0);
+                    let norm = crate::matrix::norm2(null.row(j));
+                    let mut by_its_row = || {
+                        let span = span.get_or_insert_with(|| {
+                            let rows = Matrix::from_fn(6 + k, n, |i, c| a_row(i)[c] * dinv[c]);
+                            decompose(&rows, RankThreshold::Relative(opts.rank_tolerance))
+                                .map(|d| d.row_basis)
+                        });
+                        span.as_ref().is_ok_and(|basis| {
+                            pinned_by_its_row(basis, a_row(6 + k + j), &dinv, PINNED * n as f64)
+                        })
+                    };
+                    if norm <= pinned || (norm <= opts.rank_tolerance && by_its_row()) {
+                        null.row_mut(j).iter_mut().for_each(|v| *v = 0.0);
                     }
                 }
                 (eq, eq_w, unreachable, dc.row_basis, null)

@@ -413,6 +413,48 @@ fn a_pinned_joint_at_its_limit_is_held_whatever_its_arms() {
     }
 }
 
+/// A limit exactly at a torque that the wrench pins only up to the rounding its row of
+/// Jᵀ was formed with (`fixtures/fuzz/limit-at-a-torque-pinned-to-rounding.json` and
+/// `limit-above-a-torque-pinned-to-rounding.json`, `fuzz_answers.py pinned-limits`
+/// seeds 3463 and 3141: a row `s cᵀ G` in floating point, in G's span to 3e-16 of
+/// itself, whose row of the equalities' null basis came out above `PINNED`). Every
+/// admissible torque meets the limit, so the answer is the grasp's without it, linear
+/// and exact, in any units: before, one was infeasible and the other's σ 2e-5 high.
+#[test]
+fn a_limit_at_a_torque_pinned_to_rounding_is_the_grasp_without_it() {
+    for name in [
+        "limit-at-a-torque-pinned-to-rounding",
+        "limit-above-a-torque-pinned-to-rounding",
+    ] {
+        let limited = fixture(&format!("fuzz/{name}"));
+        let mut free = limited.clone();
+        free.torque_limits = None;
+        for (l, f) in [(1.0, 1.0), (1e-3, 1e3), (1e3, 1e-3), (0.244, 17.7)] {
+            let (q, p) = (
+                grasp_testkit::rescale(&limited, l, f),
+                grasp_testkit::rescale(&free, l, f),
+            );
+            for cones in [Cones::Linear, Cones::Exact] {
+                let (s, t) = (
+                    run(&q, Backend::ActiveSet, cones),
+                    run(&p, Backend::ActiveSet, cones),
+                );
+                let at = format!("{name}, lengths × {l:e}, forces × {f:e}, {cones:?}");
+                assert_eq!(s.status, Status::Optimal, "{at}: {:?}", s.reason);
+                assert_eq!(t.status, Status::Optimal, "{at} without the limit");
+                // Both within the optimality tolerance of one optimum (the exact
+                // certificate's 2e-9 each).
+                assert!(
+                    rel(s.objective, t.objective) <= 4e-9,
+                    "{at}: σ {} against {} without the limit",
+                    s.objective,
+                    t.objective
+                );
+            }
+        }
+    }
+}
+
 /// The pinch's roll joints, which the equalities pin, at torques other than 0 (a
 /// wrench with a sideways force or a twist): one constant row of a second-order cone
 /// (a contact's fy, which the wrench fixes) still carries the cone's multiplier. A
