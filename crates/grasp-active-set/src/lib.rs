@@ -329,6 +329,11 @@ struct Engine {
     /// The last amplified key set whose relaxation gave no better answer, as rows of H
     /// (sorted), and its wrench ([`Engine::relaxed`]).
     amplified: (Vec<usize>, [f64; 6]),
+    /// Set when the last solve ended `infeasible` on a proof whose rows are
+    /// independent beyond their rounding ([`Iter::undecided_run`]): it rules out only
+    /// the torques near its point, and the interior-point method may still find one
+    /// ([`ActiveSetSolver::solve_raw`]).
+    local_proof: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -803,6 +808,7 @@ impl Engine {
             ws,
             hot: hot::HotMap::new(k, nr, m),
             amplified: (Vec::new(), [f64::NAN; 6]),
+            local_proof: false,
         })
     }
 }
@@ -843,6 +849,25 @@ impl TorqueSolver for ActiveSetSolver {
             self.engine
                 .solve(|| qp.least_distance(), w, &WarmStart::default(), out);
             out.iterations += iterations;
+        }
+        // A proof that rules out only the torques near its point: the interior-point
+        // method, which follows no key set, answers where it certifies an optimum.
+        if out.status == Status::Infeasible && self.engine.local_proof {
+            let (reason, iterations) = (out.reason.take(), out.iterations);
+            if self.solve_fallback(w, out) && out.status == Status::Optimal {
+                out.iterations += iterations;
+                out.warnings.push(
+                    "active-set's proof of infeasibility held only near its own point \
+                     (rows independent beyond their rounding); this answer is its \
+                     interior-point method's"
+                        .into(),
+                );
+            } else {
+                out.status = Status::Infeasible;
+                out.reason = reason;
+                out.active_set = None;
+                out.iterations = iterations;
+            }
         }
     }
 
@@ -922,6 +947,7 @@ impl Engine {
     ) {
         out.torque.clear();
         out.iterations = 0;
+        self.local_proof = false;
         let active = out.active_set.get_or_insert_with(Vec::new);
         active.clear();
         // Rows that no torque affects must hold for the wrench alone (a row the free
@@ -1054,6 +1080,7 @@ impl Engine {
             state.iterations = iterations;
             end = state.run(warm);
             iterations = state.iterations;
+            let local = state.local_proof;
             next = match end {
                 End::Optimal | End::IterationLimit(_) => None,
                 End::Infeasible(_) if !matches!(run, Run::Rounding { .. }) => {
@@ -1062,6 +1089,7 @@ impl Engine {
                 End::Infeasible(_) => None,
                 End::Numerical(_) => tight.then_some(Run::Loose),
             };
+            self.local_proof = local && matches!(end, End::Infeasible(_));
             first = false;
             if let (End::Optimal, Run::Rounding { .. }) = (&end, run) {
                 // The key set on the rows as given, where its point holds them (σ
@@ -1337,6 +1365,9 @@ struct Iter<'s> {
     /// Set with `infeasible` (or an elastic proof) when the proof's violation does not
     /// decide: the run that may ([`Iter::undecided_run`]).
     undecided: Option<Run>,
+    /// Set with `infeasible` (or an elastic proof) when the proof's rows are
+    /// independent beyond their rounding ([`Iter::undecided_run`]).
+    local_proof: bool,
     /// The wrench, for the rounding of the rows' constants.
     w: [f64; 6],
 }
@@ -1360,6 +1391,7 @@ impl<'s> Iter<'s> {
             tight,
             feasibility,
             undecided: None,
+            local_proof: false,
             w: *w,
         }
     }
@@ -1382,21 +1414,43 @@ impl<'s> Iter<'s> {
     /// whose moment arms are 1e-6 of the others' leaves rows whose entries cancelled
     /// from 1e6 times their norm: fuzz seed 246677, a grasp whose only admissible force
     /// is zero, was infeasible in one system of units.)
+    ///
+    /// With it, whether the proof is only local: its combination `ζ = Σ c_r a_r`, 0 in
+    /// y to the factor's [`ActiveSetSettings::dependence_tolerance`], is not 0 to the
+    /// rows' own rounding. Then `ζ · (y − z) ≥ v` holds at every feasible y, which
+    /// rules out only those within `v / ‖ζ‖` of the iterate z: a joint whose force
+    /// response is 1e13 times the others' makes every row nearly parallel, and
+    /// `fuzz_answers.py nested` seed 253291, feasible, was proven infeasible by two
+    /// rows 2e-11 apart with `v / ‖ζ‖` of the torques' own size.
     fn undecided_run(
         &self,
         v: f64,
-        combination: impl Iterator<Item = (usize, f64)>,
-    ) -> Option<Run> {
+        combination: impl Iterator<Item = (usize, f64)> + Clone,
+    ) -> (Option<Run>, bool) {
         // The combination is 0 in y (to its rounding): its rows' rounding enters at the
         // size of a point that would hold them, the problem's scale, not at the
         // iterate's, which a tightened run can take far past it: there it undid the
         // proof on fuzz seed 18013 (`fixtures/fuzz/inscribed-optimum-outside.json`).
         let size = self.scale;
         let u0 = grasp_core::matrix::norm2(&self.s.ws.u);
-        let noise: f64 = combination
+        let noise: f64 = (combination.clone())
             .map(|(r, c)| c.abs() * self.s.noise(r, &self.w, size + u0))
             .sum();
-        if self.tight && v <= self.feas_tol() / TIGHT {
+        // ‖δa_r‖ ≤ m ε per_y_r for unit rows ([`Engine::noise`]).
+        let per_y: f64 = (combination.clone())
+            .map(|(r, c)| c.abs() * self.s.noise[r][0])
+            .sum();
+        let zeta: f64 = (0..self.k())
+            .map(|j| {
+                let zj: f64 = (combination.clone())
+                    .map(|(r, c)| c * self.s.a.row(r)[j])
+                    .sum();
+                zj * zj
+            })
+            .sum::<f64>()
+            .sqrt();
+        let local = zeta > self.s.m as f64 * f64::EPSILON * per_y;
+        let run = if self.tight && v <= self.feas_tol() / TIGHT {
             Some(Run::Loose)
         } else {
             // Relaxed by twice what undoes this proof: the answer moves with the
@@ -1405,7 +1459,8 @@ impl<'s> Iter<'s> {
                 size,
                 share: (2.0 * v / noise).min(1.0),
             })
-        }
+        };
+        (run, local)
     }
 
     /// Adds row `i` to the key set; false when it depends on the rows already there.
@@ -1698,7 +1753,8 @@ impl<'s> Iter<'s> {
                     let key = (0..t)
                         .filter(|&pos| rows[pos] != S_ROW)
                         .map(|pos| (rows[pos], self.s.ws.factor.lambda(pos)));
-                    self.undecided = self.undecided_run(worst.0, key.chain([(p, 1.0)]));
+                    (self.undecided, self.local_proof) =
+                        self.undecided_run(worst.0, key.chain([(p, 1.0)]));
                     return Err(p);
                 }
                 for pos in 0..t {
@@ -1829,7 +1885,7 @@ impl<'s> Iter<'s> {
                         let total: f64 = key().map(|(r, l)| l * ws.e[r]).sum();
                         let per_s =
                             key().map(|(r, l)| (r, if total > 0.0 { l / total } else { 0.0 }));
-                        self.undecided = self.undecided_run(ws.z[k], per_s);
+                        (self.undecided, self.local_proof) = self.undecided_run(ws.z[k], per_s);
                         End::Infeasible(None)
                     } else {
                         End::Numerical("the elastic variable would not leave the key set's span")

@@ -368,3 +368,74 @@ fn a_key_set_of_nearly_opposite_faces_is_solved_to_its_terms() {
         }
     }
 }
+
+/// A proof of infeasibility from rows that are parallel only to the factor's
+/// dependence tolerance (1e-10), not to their own rounding, rules out only the torques
+/// near its point (`fixtures/fuzz/rows-parallel-beside-a-tiny-joint*.json`,
+/// `fuzz_answers.py nested` seeds 253291 and 256090: the Ability tripod with one
+/// joint's row of Jᵀ a single entry of 4e-14 or 5e-13, whose force response, 1e13 times
+/// the others', makes every row nearly parallel). Both grasps were `infeasible` at
+/// N = 8 and exact and held at N = 4. Now each answer at N = 4, 8, 16, 32 and exact is
+/// optimal in any units, σ falls as N grows (each within its stated bound),
+/// and at N = 8 σ is Clarabel's through cvxpy on the exported QP (row misses 1.3e-10
+/// and 1.5e-9): within the certificate's 2e-9 of the optimum, and the oracle's own
+/// 2e-9 for its misses.
+#[test]
+fn a_proof_from_rows_parallel_beyond_their_rounding_is_not_final() {
+    for (name, oracle) in [
+        ("rows-parallel-beside-a-tiny-joint", 0.024154065455693007),
+        ("rows-parallel-beside-a-tiny-joint-2", 0.0002174589526613313),
+    ] {
+        let p = fuzz_fixture(name);
+        for (l, f) in [(1.0, 1.0), (1e-3, 1e3), (1e3, 1e-3), (0.244, 17.7)] {
+            let q = grasp_testkit::rescale(&p, l, f);
+            let answers: Vec<(usize, Solution)> = [4, 8, 16, 32]
+                .into_iter()
+                .map(|sides| {
+                    let mut q = q.clone();
+                    q.linearization.sides = sides;
+                    (sides, solved(&q, &SolverConfig::default()))
+                })
+                .collect();
+            let at = format!("{name}, lengths × {l:e}, forces × {f:e}");
+            for (i, (n, a)) in answers.iter().enumerate() {
+                assert_eq!(a.status, Status::Optimal, "{at}, N = {n}: {:?}", a.reason);
+                for (m, b) in &answers[i + 1..] {
+                    assert!(
+                        b.objective <= a.objective * (1.0 + stated_excess(b)),
+                        "{at}: σ {} at N = {m} above σ {} at N = {n}",
+                        b.objective,
+                        a.objective
+                    );
+                }
+            }
+            // The exact cones contain every polygon (the exact path's circumscribed
+            // polyhedra took the same false proof).
+            let exact = solved(
+                &q,
+                &SolverConfig {
+                    cones: grasp_torque::Cones::Exact,
+                    ..Default::default()
+                },
+            );
+            assert_eq!(
+                exact.status,
+                Status::Optimal,
+                "{at}, exact: {:?}",
+                exact.reason
+            );
+            let last = &answers[answers.len() - 1].1;
+            assert!(
+                exact.objective <= last.objective * (1.0 + stated_excess(&exact)),
+                "{at}: exact σ {} above σ {} at N = 32",
+                exact.objective,
+                last.objective
+            );
+            let sigma = answers[1].1.objective / (l * f).powi(2);
+            assert!(
+                (sigma - oracle).abs() <= 4e-9 * oracle,
+                "{at}: σ {sigma} at N = 8 against the oracle's {oracle}"
+            );
+        }
+    }
+}
