@@ -330,7 +330,7 @@ struct Engine {
     /// (sorted), and its wrench ([`Engine::relaxed`]).
     amplified: (Vec<usize>, [f64; 6]),
     /// Set when the last solve ended `infeasible` on a proof whose rows are
-    /// independent beyond their rounding ([`Iter::undecided_run`]): it rules out only
+    /// independent beyond their rounding ([`Iter::local_proof`]): it rules out only
     /// the torques near its point, and the interior-point method may still find one
     /// ([`ActiveSetSolver::solve_raw`]).
     local_proof: bool,
@@ -1365,8 +1365,8 @@ struct Iter<'s> {
     /// Set with `infeasible` (or an elastic proof) when the proof's violation does not
     /// decide: the run that may ([`Iter::undecided_run`]).
     undecided: Option<Run>,
-    /// Set with `infeasible` (or an elastic proof) when the proof's rows are
-    /// independent beyond their rounding ([`Iter::undecided_run`]).
+    /// Set with `infeasible` when the dual phase's proof holds only near its point
+    /// ([`Iter::local_proof`]).
     local_proof: bool,
     /// The wrench, for the rounding of the rows' constants.
     w: [f64; 6],
@@ -1414,43 +1414,21 @@ impl<'s> Iter<'s> {
     /// whose moment arms are 1e-6 of the others' leaves rows whose entries cancelled
     /// from 1e6 times their norm: fuzz seed 246677, a grasp whose only admissible force
     /// is zero, was infeasible in one system of units.)
-    ///
-    /// With it, whether the proof is only local: its combination `ζ = Σ c_r a_r`, 0 in
-    /// y to the factor's [`ActiveSetSettings::dependence_tolerance`], is not 0 to the
-    /// rows' own rounding. Then `ζ · (y − z) ≥ v` holds at every feasible y, which
-    /// rules out only those within `v / ‖ζ‖` of the iterate z: a joint whose force
-    /// response is 1e13 times the others' makes every row nearly parallel, and
-    /// `fuzz_answers.py nested` seed 253291, feasible, was proven infeasible by two
-    /// rows 2e-11 apart with `v / ‖ζ‖` of the torques' own size.
     fn undecided_run(
         &self,
         v: f64,
-        combination: impl Iterator<Item = (usize, f64)> + Clone,
-    ) -> (Option<Run>, bool) {
+        combination: impl Iterator<Item = (usize, f64)>,
+    ) -> Option<Run> {
         // The combination is 0 in y (to its rounding): its rows' rounding enters at the
         // size of a point that would hold them, the problem's scale, not at the
         // iterate's, which a tightened run can take far past it: there it undid the
         // proof on fuzz seed 18013 (`fixtures/fuzz/inscribed-optimum-outside.json`).
         let size = self.scale;
         let u0 = grasp_core::matrix::norm2(&self.s.ws.u);
-        let noise: f64 = (combination.clone())
+        let noise: f64 = combination
             .map(|(r, c)| c.abs() * self.s.noise(r, &self.w, size + u0))
             .sum();
-        // ‖δa_r‖ ≤ m ε per_y_r for unit rows ([`Engine::noise`]).
-        let per_y: f64 = (combination.clone())
-            .map(|(r, c)| c.abs() * self.s.noise[r][0])
-            .sum();
-        let zeta: f64 = (0..self.k())
-            .map(|j| {
-                let zj: f64 = (combination.clone())
-                    .map(|(r, c)| c * self.s.a.row(r)[j])
-                    .sum();
-                zj * zj
-            })
-            .sum::<f64>()
-            .sqrt();
-        let local = zeta > self.s.m as f64 * f64::EPSILON * per_y;
-        let run = if self.tight && v <= self.feas_tol() / TIGHT {
+        if self.tight && v <= self.feas_tol() / TIGHT {
             Some(Run::Loose)
         } else {
             // Relaxed by twice what undoes this proof: the answer moves with the
@@ -1459,8 +1437,41 @@ impl<'s> Iter<'s> {
                 size,
                 share: (2.0 * v / noise).min(1.0),
             })
-        };
-        (run, local)
+        }
+    }
+
+    /// Whether the dual phase's proof by the combination `ζ = Σ c_r a_r` (0 in y to
+    /// the factor's [`ActiveSetSettings::dependence_tolerance`]; `zn`, the new row's
+    /// distance from the key set's span, is its size as the factor sees it) holds only
+    /// near its point: both `zn` and `‖ζ‖` formed from the rows themselves exceed the
+    /// rows' own rounding, `m ε Σ |c_r| per_y_r` ([`Engine::noise`]). Then every feasible y has `ζ · (y − z) ≥ v` at the
+    /// iterate z, which rules out only the y within `v / ‖ζ‖` of it: a joint whose
+    /// force response is 1e13 times the others' makes every row nearly parallel, and
+    /// `fuzz_answers.py nested` seed 253291, feasible, was proven infeasible by two
+    /// rows 2e-11 apart with `v / ‖ζ‖` of the torques' own size.
+    fn local_proof(
+        &self,
+        zn: f64,
+        combination: impl Iterator<Item = (usize, f64)> + Clone,
+    ) -> bool {
+        // ‖δa_r‖ ≤ m ε per_y_r for unit rows.
+        let rounding = self.s.m as f64
+            * f64::EPSILON
+            * (combination.clone())
+                .map(|(r, c)| c.abs() * self.s.noise[r][0])
+                .sum::<f64>();
+        zn > rounding && {
+            let zeta = (0..self.k())
+                .map(|j| {
+                    let zj: f64 = (combination.clone())
+                        .map(|(r, c)| c * self.s.a.row(r)[j])
+                        .sum();
+                    zj * zj
+                })
+                .sum::<f64>()
+                .sqrt();
+            zeta > rounding
+        }
     }
 
     /// Adds row `i` to the key set; false when it depends on the rows already there.
@@ -1752,9 +1763,10 @@ impl<'s> Iter<'s> {
                     let rows = self.s.ws.factor.rows();
                     let key = (0..t)
                         .filter(|&pos| rows[pos] != S_ROW)
-                        .map(|pos| (rows[pos], self.s.ws.factor.lambda(pos)));
-                    (self.undecided, self.local_proof) =
-                        self.undecided_run(worst.0, key.chain([(p, 1.0)]));
+                        .map(|pos| (rows[pos], -self.s.ws.factor.lambda(pos)));
+                    let combination = key.chain([(p, 1.0)]);
+                    self.undecided = self.undecided_run(worst.0, combination.clone());
+                    self.local_proof = self.local_proof(zn, combination);
                     return Err(p);
                 }
                 for pos in 0..t {
@@ -1885,7 +1897,7 @@ impl<'s> Iter<'s> {
                         let total: f64 = key().map(|(r, l)| l * ws.e[r]).sum();
                         let per_s =
                             key().map(|(r, l)| (r, if total > 0.0 { l / total } else { 0.0 }));
-                        (self.undecided, self.local_proof) = self.undecided_run(ws.z[k], per_s);
+                        self.undecided = self.undecided_run(ws.z[k], per_s);
                         End::Infeasible(None)
                     } else {
                         End::Numerical("the elastic variable would not leave the key set's span")
