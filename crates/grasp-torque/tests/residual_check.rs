@@ -22,6 +22,17 @@ fn solved(q: &GraspProblem, config: &SolverConfig) -> Solution {
         .clone()
 }
 
+/// Cold solves of `p` with each number of polygon sides in `sides`.
+fn by_sides(p: &GraspProblem, sides: &[usize]) -> Vec<(usize, Solution)> {
+    (sides.iter())
+        .map(|&n| {
+            let mut q = p.clone();
+            q.linearization.sides = n;
+            (n, solved(&q, &SolverConfig::default()))
+        })
+        .collect()
+}
+
 /// A problem of `fixtures/fuzz`.
 fn fuzz_fixture(name: &str) -> GraspProblem {
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/fuzz");
@@ -310,14 +321,7 @@ fn a_refused_linear_answer_is_held_by_the_interior_point_method() {
 #[test]
 fn an_iterate_stopped_short_states_the_bound_its_gap_gives() {
     let p = fuzz_fixture("noisy-paper-grasp-stopped-short");
-    let answers: Vec<(usize, Solution)> = [4, 8, 16, 32, 64]
-        .into_iter()
-        .map(|sides| {
-            let mut q = p.clone();
-            q.linearization.sides = sides;
-            (sides, solved(&q, &SolverConfig::default()))
-        })
-        .collect();
+    let answers = by_sides(&p, &[4, 8, 16, 32, 64]);
     for (i, (n, a)) in answers.iter().enumerate() {
         let bound = stated_excess(a);
         assert!(bound <= 1e-6, "N = {n}: {:?}", a.warnings);
@@ -389,14 +393,7 @@ fn a_proof_from_rows_parallel_beyond_their_rounding_is_not_final() {
         let p = fuzz_fixture(name);
         for (l, f) in [(1.0, 1.0), (1e-3, 1e3), (1e3, 1e-3), (0.244, 17.7)] {
             let q = grasp_testkit::rescale(&p, l, f);
-            let answers: Vec<(usize, Solution)> = [4, 8, 16, 32]
-                .into_iter()
-                .map(|sides| {
-                    let mut q = q.clone();
-                    q.linearization.sides = sides;
-                    (sides, solved(&q, &SolverConfig::default()))
-                })
-                .collect();
+            let answers = by_sides(&q, &[4, 8, 16, 32]);
             let at = format!("{name}, lengths × {l:e}, forces × {f:e}");
             for (i, (n, a)) in answers.iter().enumerate() {
                 assert_eq!(a.status, Status::Optimal, "{at}, N = {n}: {:?}", a.reason);
