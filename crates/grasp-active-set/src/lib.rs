@@ -1444,11 +1444,12 @@ impl<'s> Iter<'s> {
     /// the factor's [`ActiveSetSettings::dependence_tolerance`]; `zn`, the new row's
     /// distance from the key set's span, is its size as the factor sees it) holds only
     /// near its point: both `zn` and `‖ζ‖` formed from the rows themselves exceed the
-    /// rows' own rounding, `m ε Σ |c_r| per_y_r` ([`Engine::noise`]). Then every feasible y has `ζ · (y − z) ≥ v` at the
-    /// iterate z, which rules out only the y within `v / ‖ζ‖` of it: a joint whose
-    /// force response is 1e13 times the others' makes every row nearly parallel, and
-    /// `fuzz_answers.py nested` seed 253291, feasible, was proven infeasible by two
-    /// rows 2e-11 apart with `v / ‖ζ‖` of the torques' own size.
+    /// rows' own rounding, `m ε Σ |c_r| per_y_r` ([`Engine::noise`]). Then every
+    /// feasible y has `ζ · (y − z) ≥ v` at the iterate z, which rules out only the y
+    /// within `v / ‖ζ‖` of it: a joint whose force response is 1e13 times the others'
+    /// makes every row nearly parallel, and `fuzz_answers.py nested` seed 253291,
+    /// feasible, was proven infeasible by two rows 2e-11 apart with `v / ‖ζ‖` of the
+    /// torques' own size.
     fn local_proof(
         &self,
         zn: f64,

@@ -379,7 +379,8 @@ fn a_key_set_of_nearly_opposite_faces_is_solved_to_its_terms() {
 /// `fuzz_answers.py nested` seeds 253291 and 256090: the Ability tripod with one
 /// joint's row of Jᵀ a single entry of 4e-14 or 5e-13, whose force response, 1e13 times
 /// the others', makes every row nearly parallel). Both grasps were `infeasible` at
-/// N = 8 and exact and held at N = 4. Now each answer at N = 4, 8, 16, 32 and exact is
+/// N = 8 (the first at 32 and exact too) and held at N = 4. Now each answer at
+/// N = 4, 8, 16, 32 and exact is
 /// optimal in any units, σ falls as N grows (each within its stated bound),
 /// and at N = 8 σ is Clarabel's through cvxpy on the exported QP (row misses 1.3e-10
 /// and 1.5e-9): within the certificate's 2e-9 of the optimum, and the oracle's own
