@@ -381,7 +381,8 @@ fn a_key_set_of_nearly_opposite_faces_is_solved_to_its_terms() {
 /// the others', makes every row nearly parallel). Both grasps were `infeasible` at
 /// N = 8 (the first at 32 and exact too) and held at N = 4. Now each answer at
 /// N = 4, 8, 16, 32 and exact is
-/// optimal in any units, σ falls as N grows (each within its stated bound),
+/// optimal in any units and under any load (forces alone × 1e6 or 1e-6: the wrench
+/// and the torque limits together), σ falls as N grows (each within its stated bound),
 /// and at N = 8 σ is Clarabel's through cvxpy on the exported QP (row misses 1.3e-10
 /// and 1.5e-9): within the certificate's 2e-9 of the optimum, and the oracle's own
 /// 2e-9 for its misses.
@@ -392,7 +393,14 @@ fn a_proof_from_rows_parallel_beyond_their_rounding_is_not_final() {
         ("rows-parallel-beside-a-tiny-joint-2", 0.0002174589526613313),
     ] {
         let p = fuzz_fixture(name);
-        for (l, f) in [(1.0, 1.0), (1e-3, 1e3), (1e3, 1e-3), (0.244, 17.7)] {
+        for (l, f) in [
+            (1.0, 1.0),
+            (1e-3, 1e3),
+            (1e3, 1e-3),
+            (0.244, 17.7),
+            (1.0, 1e6),
+            (1.0, 1e-6),
+        ] {
             let q = grasp_testkit::rescale(&p, l, f);
             let answers = by_sides(&q, &[4, 8, 16, 32]);
             let at = format!("{name}, lengths × {l:e}, forces × {f:e}");
