@@ -1003,9 +1003,10 @@ impl Engine {
                 out.status = Status::Optimal;
                 let a = self.amplification();
                 if a > AMPLIFIED {
-                    self.refine(&ld(), w, out);
-                    if !self.is_amplified_set(w) {
-                        self.relaxed(w, a, out);
+                    let ld = ld();
+                    self.refine(&ld, w, out);
+                    if self.is_amplified_set(w) || !self.relaxed(w, a, out) {
+                        self.warn_rounding_spread(&ld, w, a, out);
                     }
                 }
             }
@@ -1207,10 +1208,10 @@ impl Engine {
     /// solver's, and above the exact cones' σ*, which the rows within tolerance
     /// reach). That answer replaces `out` where it is optimal on the rows as given (to
     /// the feasibility tolerance), its own key set is not amplified, and its σ is lower
-    /// by more than an `almost_optimal` bound; else `out` stands, and its key set is
-    /// not relaxed again.
+    /// by more than an `almost_optimal` bound (true); else `out` stands, and its key set
+    /// is not relaxed again.
     #[cold]
-    fn relaxed(&mut self, w: &[f64; 6], a: f64, out: &mut Solution) {
+    fn relaxed(&mut self, w: &[f64; 6], a: f64, out: &mut Solution) -> bool {
         let sigma = self.sigma();
         let relax = RELAX * self.settings.feasibility_tolerance * self.rhs_scale();
         let (end, iterations) = self.runs(w, &WarmStart::default(), false, relax);
@@ -1228,7 +1229,7 @@ impl Engine {
                 out.warnings.push(format!(
                     "the key set's multipliers cancelled to one part in {a:.1e} (nearly dependent rows, whose rounding they amplify): this answer is the key set found with every row relaxed by {RELAX} of the feasibility tolerance, solved on the rows as given, σ {drop:.1e} lower (relative)"
                 ));
-                return;
+                return true;
             }
         }
         // (The factor is the relaxed solve's: the next solve builds its own.)
@@ -1237,6 +1238,43 @@ impl Engine {
         set.clear();
         set.extend_from_slice(out.active_set.as_deref().unwrap_or_default());
         *at = *w;
+        false
+    }
+
+    /// Warns where the rounding of an amplified key set's rows moves σ by more than
+    /// `optimal` otherwise claims. Each key row's constant moves σ by its multiplier
+    /// (`μ_r = ∂σ/∂c_r`), so rounding of `ε` on the terms of `c_r − H_r τ` moves it by
+    /// up to `Σ_r μ_r ε terms_r`: on rows nearly opposite to one part in 1e9, the terms
+    /// are 1e9 times the row's value, and σ at N = 8, 16, 32 and 64 differed by 1.5e-7
+    /// (`fuzz_answers.py nested` seed 260254, the paper example with noise on G, where
+    /// this estimate is 3.5e-7): the rows, rounded anew at each N, fix σ no closer.
+    fn warn_rounding_spread(
+        &self,
+        ld: &LeastDistance<'_>,
+        w: &[f64; 6],
+        a: f64,
+        out: &mut Solution,
+    ) {
+        let (Some(set), sigma) = (out.active_set.as_deref(), self.sigma()) else {
+            return;
+        };
+        let spread: f64 = set
+            .iter()
+            .map(|&h| {
+                let (_, terms) = ld.row_value(h, &out.torque);
+                let c_terms = ld.c0_terms[h]
+                    + (ld.hw.row(h).iter().zip(w))
+                        .map(|(a, b)| (a * b).abs())
+                        .sum::<f64>();
+                out.multipliers[h] * f64::EPSILON * (terms + c_terms)
+            })
+            .sum::<f64>()
+            / sigma;
+        if spread > 2.0 * CERTIFICATE_TOLERANCE {
+            out.warnings.push(format!(
+                "σ is fixed by the key set's rows only to about {spread:.1e}, relative: the rows nearly depend on each other (multipliers cancelling to one part in {a:.1e}), and the rounding of their terms moves σ by their multipliers times it (optimal answers are otherwise within 2e-9)"
+            ));
+        }
     }
 
     /// Iterative refinement of an amplified key set's answer `out` in τ (at most

@@ -11,7 +11,7 @@ use grasp_torque::{
 };
 
 mod common;
-use common::stated_excess;
+use common::{stated_excess, stated_spread};
 
 /// A cold solve of `q` at its own wrench.
 fn solved(q: &GraspProblem, config: &SolverConfig) -> Solution {
@@ -443,5 +443,77 @@ fn a_proof_from_rows_parallel_beyond_their_rounding_is_not_final() {
                 "{at}: σ {sigma} at N = 8 against the oracle's {oracle}"
             );
         }
+    }
+}
+
+/// Where the key set's rows nearly depend on each other, their rounding fixes σ no
+/// closer than their multipliers times it, and the answer says how close. On
+/// `fixtures/fuzz/rows-opposite-to-1e-9-on-a-noisy-paper-grasp.json` (nested seed
+/// 260254: two faces opposite to one part in 1e9, terms of 1.9e9) σ at N = 8, 32
+/// and 64 differed by up to 1.5e-7, not nested; on
+/// `…/squeezed-by-torques-of-1e8.json` (seed 265929: forces of 3.5e9 N holding 0.2 N)
+/// by up to 3e-5 between units. Each answer is optimal and states a spread that covers
+/// every difference, and at N = 8 the key set's point in 60-digit arithmetic on the
+/// exported QP (σ 47.127416487665906). A bundled grasp states none.
+#[test]
+fn an_answer_states_how_far_its_rows_rounding_moves_sigma() {
+    let covered = |a: &Solution, b: &Solution, at: &str| {
+        let bound = (stated_spread(a) + stated_spread(b)) * a.objective.max(b.objective);
+        assert!(
+            (a.objective - b.objective).abs() <= bound,
+            "{at}: σ {} and {} beyond their stated spreads {:e} and {:e}",
+            a.objective,
+            b.objective,
+            stated_spread(a),
+            stated_spread(b)
+        );
+    };
+    let p = fuzz_fixture("rows-opposite-to-1e-9-on-a-noisy-paper-grasp");
+    let answers = by_sides(&p, &[8, 32, 64]);
+    for (n, a) in &answers {
+        assert_eq!(a.status, Status::Optimal, "N = {n}: {:?}", a.reason);
+        assert!(stated_spread(a) > 2e-9, "N = {n}: {:?}", a.warnings);
+    }
+    for (i, (n, a)) in answers.iter().enumerate() {
+        for (m, b) in &answers[i + 1..] {
+            covered(a, b, &format!("N = {n} and {m}"));
+        }
+    }
+    let (oracle, eight) = (47.127416487665906, &answers[0].1);
+    assert!(
+        (eight.objective - oracle).abs() <= stated_spread(eight) * oracle,
+        "N = 8: σ {} against the key set's {oracle}",
+        eight.objective
+    );
+
+    let p = fuzz_fixture("squeezed-by-torques-of-1e8");
+    let answers: Vec<(String, Solution)> = [(1.0, 1.0), (1e-3, 1e3), (1e3, 1e-3), (0.244, 17.7)]
+        .into_iter()
+        .map(|(l, f)| {
+            let mut s = solved(&grasp_testkit::rescale(&p, l, f), &SolverConfig::default());
+            s.objective /= (l * f).powi(2);
+            (format!("lengths × {l:e}, forces × {f:e}"), s)
+        })
+        .collect();
+    for (at, a) in &answers {
+        assert_eq!(a.status, Status::Optimal, "{at}: {:?}", a.reason);
+        assert!(stated_spread(a) > 2e-9, "{at}: {:?}", a.warnings);
+    }
+    for (i, (at, a)) in answers.iter().enumerate() {
+        for (other, b) in &answers[i + 1..] {
+            covered(a, b, &format!("{at} and {other}"));
+        }
+    }
+
+    for path in grasp_testkit::fixture_paths(&["", "hands", "table1"]) {
+        let p = grasp_torque::load_problem(&path).unwrap();
+        let s = solved(&p, &SolverConfig::default());
+        assert_eq!(
+            stated_spread(&s),
+            0.0,
+            "{}: {:?}",
+            path.display(),
+            s.warnings
+        );
     }
 }

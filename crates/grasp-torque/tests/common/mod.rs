@@ -33,3 +33,17 @@ pub(crate) fn stated_excess(s: &Solution) -> f64 {
         _ => panic!("no answer: {:?} {:?}", s.status, s.reason),
     }
 }
+
+/// How far, relative, an answer states that the rounding of its key rows moves σ (its
+/// warning "σ is fixed by the key set's rows only to about …"), 0 where it states none.
+#[allow(dead_code)]
+pub(crate) fn stated_spread(s: &Solution) -> f64 {
+    s.warnings
+        .iter()
+        .find_map(|w| w.split("key set's rows only to about ").nth(1))
+        .map(|w| {
+            let v = w.split(',').next().unwrap_or_default();
+            v.parse().expect("the spread in the warning")
+        })
+        .unwrap_or(0.0)
+}
