@@ -22,6 +22,15 @@ fn solved(q: &GraspProblem, config: &SolverConfig) -> Solution {
         .clone()
 }
 
+/// A cold solve of `q` on the exact cones.
+fn solved_exact(q: &GraspProblem) -> Solution {
+    let config = SolverConfig {
+        cones: grasp_torque::Cones::Exact,
+        ..Default::default()
+    };
+    solved(q, &config)
+}
+
 /// Cold solves of `p` with each number of polygon sides in `sides`.
 fn by_sides(p: &GraspProblem, sides: &[usize]) -> Vec<(usize, Solution)> {
     (sides.iter())
@@ -417,13 +426,7 @@ fn a_proof_from_rows_parallel_beyond_their_rounding_is_not_final() {
             }
             // The exact cones contain every polygon (the exact path's circumscribed
             // polyhedra took the same false proof).
-            let exact = solved(
-                &q,
-                &SolverConfig {
-                    cones: grasp_torque::Cones::Exact,
-                    ..Default::default()
-                },
-            );
+            let exact = solved_exact(&q);
             assert_eq!(
                 exact.status,
                 Status::Optimal,
@@ -463,13 +466,7 @@ fn a_local_proof_stands_where_the_finer_iteration_misses_a_row() {
         s.warnings
     );
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
-    let exact = solved(
-        &p,
-        &SolverConfig {
-            cones: grasp_torque::Cones::Exact,
-            ..Default::default()
-        },
-    );
+    let exact = solved_exact(&p);
     assert_eq!(
         exact.status,
         Status::Infeasible,
