@@ -1291,11 +1291,14 @@ impl Engine {
 
     /// Warns where the rounding of an amplified key set's rows moves σ by more than
     /// `optimal` otherwise claims. Each key row's constant moves σ by its multiplier
-    /// (`μ_r = ∂σ/∂c_r`), so rounding of `ε` on the terms of `c_r − H_r τ` moves it by
-    /// up to `Σ_r μ_r ε terms_r`: on rows nearly opposite to one part in 1e9, the terms
-    /// are 1e9 times the row's value, and σ at N = 8, 16, 32 and 64 differed by 1.5e-7
-    /// (`fuzz_answers.py nested` seed 260254, the paper example with noise on G, where
-    /// this estimate is 3.5e-7): the rows, rounded anew at each N, fix σ no closer.
+    /// (`μ_r = ∂σ/∂c_r`), so rounding of `m ε` (a sum of m products) on the terms of
+    /// `c_r − H_r τ` moves it by up to `Σ_r μ_r m ε terms_r`, against σ as reported
+    /// (with the passive torques' offset). On rows nearly opposite to one part in 1e9
+    /// the terms are 1e9 times the row's value: σ at N = 8, 16, 32 and 64 differed by
+    /// 1.5e-7 (`fuzz_answers.py nested` seed 260254, the paper example with noise on
+    /// G), and between systems of units by 3.2e-3 on seed 281676 (the weighed Allegro
+    /// hand with rows of Jᵀ 1e14 apart), where `ε` alone gave 8.9e-4: the rows, rounded
+    /// anew at each N or unit, fix σ no closer.
     fn warn_rounding_spread(
         &self,
         ld: &LeastDistance<'_>,
@@ -1303,9 +1306,16 @@ impl Engine {
         a: f64,
         out: &mut Solution,
     ) {
-        let (Some(set), sigma) = (out.active_set.as_deref(), self.sigma()) else {
+        let Some(set) = out.active_set.as_deref() else {
             return;
         };
+        let sigma: f64 = (out.torque.iter().enumerate())
+            .map(|(j, t)| {
+                let u = t + ld.offset.get(j).copied().unwrap_or(0.0);
+                ld.weights[j] * u * u
+            })
+            .sum();
+        let rounding = self.m as f64 * f64::EPSILON;
         let spread: f64 = set
             .iter()
             .map(|&h| {
@@ -1314,7 +1324,7 @@ impl Engine {
                     + (ld.hw.row(h).iter().zip(w))
                         .map(|(a, b)| (a * b).abs())
                         .sum::<f64>();
-                out.multipliers[h] * f64::EPSILON * (terms + c_terms)
+                out.multipliers[h] * rounding * (terms + c_terms)
             })
             .sum::<f64>()
             / sigma;

@@ -163,6 +163,9 @@ pub struct LeastDistance<'a> {
     /// How `eq` was formed, when the model's consistency rows are it (see
     /// [`EqFactors`]).
     pub eq_factors: Option<EqFactors<'a>>,
+    /// What the answer adds to `x` (the passive torques' `u_p`, [`crate::model::Passive`];
+    /// empty without): the σ reported is `Σ weights_j (x_j + offset_j)²`.
+    pub offset: &'a [f64],
 }
 
 /// The inequality rows H of a [`LeastDistance`] problem.
@@ -771,6 +774,7 @@ impl TorqueQp {
                 null: &self.model.eq_null,
                 scale: &self.model.torque_scale,
             }),
+            offset: &self.model.passive.torque_offset,
         }
     }
 }
@@ -884,6 +888,7 @@ impl ForceSpaceQp {
             weights: &self.weights,
             rows: &self.rows,
             eq_factors: None,
+            offset: &[],
         }
     }
 

@@ -476,14 +476,18 @@ fn a_local_proof_stands_where_the_finer_iteration_misses_a_row() {
 }
 
 /// Where the key set's rows nearly depend on each other, their rounding fixes σ no
-/// closer than their multipliers times it, and the answer says how close. On
-/// `fixtures/fuzz/rows-opposite-to-1e-9-on-a-noisy-paper-grasp.json` (nested seed
-/// 260254: two faces opposite to one part in 1e9, terms of 1.9e9) σ at N = 8, 32
-/// and 64 differed by up to 1.5e-7, not nested; on
-/// `…/squeezed-by-torques-of-1e8.json` (seed 265929: forces of 3.5e9 N holding 0.2 N)
-/// by up to 3e-5 between units. Each answer is optimal and states a spread that covers
-/// every difference, and at N = 8 the key set's point in 60-digit arithmetic on the
-/// exported QP (σ 47.127416487665906). A bundled grasp states none.
+/// closer than their multipliers times it, and the answer says how close. σ differed:
+/// - on `fixtures/fuzz/rows-opposite-to-1e-9-on-a-noisy-paper-grasp.json` (nested
+///   seed 260254: two faces opposite to one part in 1e9, terms of 1.9e9) at N = 8, 32
+///   and 64 by up to 1.5e-7, not nested;
+/// - on `…/squeezed-by-torques-of-1e8.json` (seed 265929: forces of 3.5e9 N holding
+///   0.2 N) by up to 3e-5 between units;
+/// - on `…/rows-of-jt-1e14-apart-on-the-weighed-allegro.json` (seed 281676, with
+///   passive torques) by 3.2e-3 between units.
+///
+/// Each answer is optimal and states a spread that covers every difference, and at
+/// N = 8 the first grasp's key-set point in 50 digits on the exported QP
+/// (`scripts/key_set_optimum.py`: σ 47.127416487665906). A bundled grasp states none.
 #[test]
 fn an_answer_states_how_far_its_rows_rounding_moves_sigma() {
     // Each answer optimal, with a spread, and every two within their spreads.
@@ -520,22 +524,30 @@ fn an_answer_states_how_far_its_rows_rounding_moves_sigma() {
     // In four systems of units, and at N = 16 to 64 (where a proof from rows 3.7e-11
     // from dependent, 2 500 times their rounding, called it infeasible; the iteration
     // with rows counted independent to 1e-13 holds it).
-    let p = fuzz_fixture("squeezed-by-torques-of-1e8");
-    let mut answers: Vec<(String, Solution)> =
-        [(1.0, 1.0), (1e-3, 1e3), (1e3, 1e-3), (0.244, 17.7)]
-            .into_iter()
-            .map(|(l, f)| {
-                let mut s = solved(&grasp_testkit::rescale(&p, l, f), &SolverConfig::default());
+    let in_units = |p: &GraspProblem, units: &[(f64, f64)]| -> Vec<(String, Solution)> {
+        (units.iter())
+            .map(|&(l, f)| {
+                let mut s = solved(&grasp_testkit::rescale(p, l, f), &SolverConfig::default());
                 s.objective /= (l * f).powi(2);
                 (format!("lengths × {l:e}, forces × {f:e}"), s)
             })
-            .collect();
+            .collect()
+    };
+    let p = fuzz_fixture("squeezed-by-torques-of-1e8");
+    let mut answers = in_units(&p, &[(1.0, 1.0), (1e-3, 1e3), (1e3, 1e-3), (0.244, 17.7)]);
     answers.extend(
         by_sides(&p, &[16, 32, 64])
             .into_iter()
             .map(|(n, s)| (format!("N = {n}"), s)),
     );
     covered(&answers);
+    // With passive torques, whose offset the spread is taken against too; the second
+    // system of units is the search's, where σ moved by 3.2e-3.
+    let p = fuzz_fixture("rows-of-jt-1e14-apart-on-the-weighed-allegro");
+    covered(&in_units(
+        &p,
+        &[(1.0, 1.0), (0.031, 48.8), (1e-3, 1e3), (0.244, 17.7)],
+    ));
 
     for path in grasp_testkit::fixture_paths(&["", "hands", "table1"]) {
         let p = grasp_torque::load_problem(&path).unwrap();
