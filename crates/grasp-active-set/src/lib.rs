@@ -1296,9 +1296,9 @@ impl Engine {
     /// (with the passive torques' offset). On rows nearly opposite to one part in 1e9
     /// the terms are 1e9 times the row's value: σ at N = 8, 16, 32 and 64 differed by
     /// 1.5e-7 (`fuzz_answers.py nested` seed 260254, the paper example with noise on
-    /// G), and between systems of units by 3.2e-3 on seed 281676 (the weighed Allegro
-    /// hand with rows of Jᵀ 1e14 apart), where `ε` alone gave 8.9e-4: the rows, rounded
-    /// anew at each N or unit, fix σ no closer.
+    /// G), and between systems of units by up to 9.6e-3 on seed 281676 (the weighed
+    /// Allegro hand with rows of Jᵀ 1e14 apart), where `ε` alone gave 8.9e-4: the rows,
+    /// rounded anew at each N or unit, fix σ no closer.
     fn warn_rounding_spread(
         &self,
         ld: &LeastDistance<'_>,
