@@ -463,16 +463,17 @@ impl ActiveSetSolver {
 
     /// The iteration again, cold, with [`ActiveSetSettings::dependence_tolerance`]
     /// [`FINE_DEPENDENCE`] times finer; true where it ends optimal and its answer
-    /// passes the core's residual check, with a warning. (Rows counted independent
-    /// that far can also give a point that misses a row: on `fuzz_answers.py` seed
-    /// 3238, which Clarabel and the exact cones' dual ray prove infeasible, σ 6e22 and a
-    /// row missed by 1.8e7 times its bound. The proof then stands.)
-    /// A local proof's rows meet, if at all, far from its point (at `v / ‖ζ‖`), where
-    /// the interior-point method may stall: on Table 1's carbon pen squeezed by forces
-    /// of 3.5e9 N (`fixtures/fuzz/squeezed-by-torques-of-1e8.json`), feasible at N = 8,
-    /// two faces and a limit 3.7e-11 from dependent (2 500 times their rounding) proved
-    /// N = 16 infeasible, and the method stalled 2.5e8 away from the optimum's scale.
-    /// Counted independent, the row joins and the iteration reaches that optimum.
+    /// passes the core's residual check, with a warning. A local proof's rows meet, if
+    /// at all, far from its point (at `v / ‖ζ‖`), where the interior-point method may
+    /// stall: on Table 1's carbon pen squeezed by forces of 3.5e9 N
+    /// (`fixtures/fuzz/squeezed-by-torques-of-1e8.json`), feasible at N = 8, two faces
+    /// and a limit 3.7e-11 from dependent (2 500 times their rounding, `v / ‖ζ‖` 2.5e8
+    /// against an iterate of norm 0.02) proved N = 16 infeasible, and the method
+    /// stalled after 10 iterations. Counted independent, the row joins and the
+    /// iteration reaches the optimum. Rows counted independent that far can also give
+    /// a point that misses a row (`fuzz_answers.py` seed 3238, which Clarabel and the
+    /// exact cones' dual ray prove infeasible: σ 6e22, a row missed by 1.8e7 times its
+    /// bound); the proof then stands.
     #[cold]
     fn solve_fine_dependence(&mut self, w: &[f64; 6], out: &mut Solution) -> bool {
         let (tol, warnings) = (
