@@ -228,7 +228,7 @@ const ROUNDING: f64 = 16.0 * f64::EPSILON;
 /// The relaxation of [`Engine::relaxed`], relative to the feasibility tolerance.
 const RELAX: f64 = 0.1;
 /// How much finer [`ActiveSetSolver::solve_fine_dependence`] takes the dependence
-/// tolerance: 1e-13 by default, still 1e3 times the rounding of a unit row.
+/// tolerance: 1e-13 by default, still 450 times ε.
 const FINE_DEPENDENCE: f64 = 1e-3;
 
 /// Whether the key set `rows` (reduced rows, with [`S_ROW`]) is `set` (rows of H,
