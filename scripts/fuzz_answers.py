@@ -44,7 +44,9 @@ answer is the one without the limit, in any units. `fuzz_answers.py statuses FRO
 COUNT OTHER_BIN [N...] [clarabel]` lists the seeds of the main search whose status, or
 optimal σ beyond 1e-12, differs between this binary and OTHER_BIN (exact cones, and
 linear ones at each N given, else at the file's; with `clarabel`, Clarabel's
-answers). `fuzz_answers.py infeasible FROM COUNT` solves each of the main search's
+answers). `fuzz_answers.py spreads FROM COUNT` counts the main search's answers (linear at N = 8
+and 16, and exact) that state how far their rows' rounding moves σ, and lists them.
+`fuzz_answers.py infeasible FROM COUNT` solves each of the main search's
 problems that the native exact solver calls infeasible again with Clarabel's exact
 cones, and lists those Clarabel holds with every contact inside its cone (friction
 margins above −1e-3: an answer within the check's tolerance of the largest force can
@@ -474,6 +476,22 @@ def infeasible(start, count):
           f"Clarabel holds")
 
 
+def spreads(start, count):
+    """Seeds FROM.. of the main search: the answers that state a spread
+    (`stated_spread`), linear at N = 8 and 16 and exact."""
+    bundled, found, runs = sources(), 0, 0
+    for seed in range(start, start + count):
+        name, p, edits, _ = seed_problem(bundled, seed)
+        for cones, extra in (("linear", ("--sides", "8")), ("linear", ("--sides", "16")), ("exact", ())):
+            d = solve(p, cones, *extra)[0]
+            runs += 1
+            if d and stated_spread(d) > 0:
+                found += 1
+                print(f"seed {seed} ({name}: {', '.join(edits)}) {cones} {' '.join(extra)}: "
+                      f"{d['status']}, spread {stated_spread(d):.1e}")
+    print(f"{runs} solves: {found} state a spread")
+
+
 def stated_bound(d):
     """The bound on σ's excess an `almost_optimal` answer states in its warning, or how
     far an answer states its rows' rounding moves σ ("σ is fixed by the key set's rows
@@ -568,6 +586,9 @@ def main():
         pinned_limits(int(sys.argv[2]), int(sys.argv[3]))
     if sys.argv[1] == "infeasible":
         infeasible(int(sys.argv[2]), int(sys.argv[3]))
+        sys.exit(0)
+    if sys.argv[1] == "spreads":
+        spreads(int(sys.argv[2]), int(sys.argv[3]))
         sys.exit(0)
     if sys.argv[1] == "nested":
         nested(int(sys.argv[2]), int(sys.argv[3]))

@@ -238,6 +238,14 @@ fn is_set(rows: &[usize], h_row: &[usize], set: &[usize]) -> bool {
     ours.clone().count() == set.len() && ours.all(|&r| set.binary_search(&h_row[r]).is_ok())
 }
 
+/// The size of the terms of row `h`'s constant `c0_h − hw_h · w`.
+fn constant_terms(ld: &LeastDistance<'_>, h: usize, w: &[f64; 6]) -> f64 {
+    ld.c0_terms[h]
+        + (ld.hw.row(h).iter().zip(w))
+            .map(|(a, b)| (a * b).abs())
+            .sum::<f64>()
+}
+
 /// Marker for the elastic bound `s ≥ 0` in the key set.
 const S_ROW: usize = usize::MAX;
 
@@ -1321,11 +1329,7 @@ impl Engine {
             .iter()
             .map(|&h| {
                 let (_, terms) = ld.row_value(h, &out.torque);
-                let c_terms = ld.c0_terms[h]
-                    + (ld.hw.row(h).iter().zip(w))
-                        .map(|(a, b)| (a * b).abs())
-                        .sum::<f64>();
-                out.multipliers[h] * rounding * (terms + c_terms)
+                out.multipliers[h] * rounding * (terms + constant_terms(ld, h, w))
             })
             .sum::<f64>()
             / sigma;
@@ -1363,10 +1367,7 @@ impl Engine {
                 if r != S_ROW {
                     let h = self.h_row[r];
                     let (v, terms) = ld.row_value(h, tau);
-                    let c_terms = ld.c0_terms[h]
-                        + (ld.hw.row(h).iter().zip(w))
-                            .map(|(a, b)| (a * b).abs())
-                            .sum::<f64>();
+                    let c_terms = constant_terms(ld, h, w);
                     resid[r] = (c(h) - v) / self.nu[r];
                     largest = largest.max(resid[r].abs());
                     noise = noise.max(ROUNDING * (terms + c_terms) / self.nu[r]);
