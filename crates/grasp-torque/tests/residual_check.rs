@@ -449,6 +449,43 @@ fn a_proof_from_rows_parallel_beyond_their_rounding_is_not_final() {
     }
 }
 
+/// A key set whose rows meet only where their rounding exceeds the problem's scale is
+/// no answer: seed 296620 in other units
+/// (`fixtures/fuzz/rows-meeting-beyond-their-rounding.json`), which Clarabel proves
+/// infeasible, was `optimal` at torques of 1e13 with the object's equilibrium missed by
+/// 24 against a load of 10 (the core's check, against forces of 5e16, passed it). At
+/// every N and in every system of units here the linear answer is now `infeasible` or
+/// `numerical_failure`, never an optimum, and the exact cones' is `infeasible`.
+#[test]
+fn a_key_set_meeting_beyond_its_rounding_is_no_answer() {
+    let p = fuzz_fixture("rows-meeting-beyond-their-rounding");
+    for (l, f) in [
+        (1.0, 1.0),
+        (1e-3, 1e3),
+        (1e3, 1e-3),
+        (0.244, 17.7),
+        (1.0, 1e6),
+    ] {
+        let q = grasp_testkit::rescale(&p, l, f);
+        let at = format!("lengths × {l:e}, forces × {f:e}");
+        for (n, a) in by_sides(&q, &[4, 8, 16, 32, 64]) {
+            assert!(
+                matches!(a.status, Status::Infeasible | Status::NumericalFailure),
+                "{at}, N = {n}: {:?} at σ {}",
+                a.status,
+                a.objective
+            );
+        }
+        let exact = solved_exact(&q);
+        assert_eq!(
+            exact.status,
+            Status::Infeasible,
+            "{at}, exact: {:?}",
+            exact.reason
+        );
+    }
+}
+
 /// A proof from rows independent beyond their rounding whose iteration with rows
 /// counted independent to 1e-13 ends at a point that misses a row stands: seed 3238
 /// (`fixtures/fuzz/infeasible-beside-rows-near-dependence.json`) is infeasible by
