@@ -42,6 +42,16 @@ fn by_sides(p: &GraspProblem, sides: &[usize]) -> Vec<(usize, Solution)> {
         .collect()
 }
 
+/// Systems of units (lengths × l, forces × f) for the fuzz fixtures' invariance.
+const UNITS: [(f64, f64); 6] = [
+    (1.0, 1.0),
+    (1e-3, 1e3),
+    (1e3, 1e-3),
+    (0.244, 17.7),
+    (1.0, 1e6),
+    (1.0, 1e-6),
+];
+
 /// A problem of `fixtures/fuzz`.
 fn fuzz_fixture(name: &str) -> GraspProblem {
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/fuzz");
@@ -402,14 +412,7 @@ fn a_proof_from_rows_parallel_beyond_their_rounding_is_not_final() {
         ("rows-parallel-beside-a-tiny-joint-2", 0.0002174589526613313),
     ] {
         let p = fuzz_fixture(name);
-        for (l, f) in [
-            (1.0, 1.0),
-            (1e-3, 1e3),
-            (1e3, 1e-3),
-            (0.244, 17.7),
-            (1.0, 1e6),
-            (1.0, 1e-6),
-        ] {
+        for (l, f) in UNITS {
             let q = grasp_testkit::rescale(&p, l, f);
             let answers = by_sides(&q, &[4, 8, 16, 32]);
             let at = format!("{name}, lengths × {l:e}, forces × {f:e}");
@@ -454,18 +457,12 @@ fn a_proof_from_rows_parallel_beyond_their_rounding_is_not_final() {
 /// (`fixtures/fuzz/rows-meeting-beyond-their-rounding.json`), which Clarabel proves
 /// infeasible, was `optimal` at torques of 1e13 with the object's equilibrium missed by
 /// 24 against a load of 10 (the core's check, against forces of 5e16, passed it). At
-/// every N and in every system of units here the linear answer is now `infeasible` or
+/// every N and in every system of units of [`UNITS`] the linear answer is now `infeasible` or
 /// `numerical_failure`, never an optimum, and the exact cones' is `infeasible`.
 #[test]
 fn a_key_set_meeting_beyond_its_rounding_is_no_answer() {
     let p = fuzz_fixture("rows-meeting-beyond-their-rounding");
-    for (l, f) in [
-        (1.0, 1.0),
-        (1e-3, 1e3),
-        (1e3, 1e-3),
-        (0.244, 17.7),
-        (1.0, 1e6),
-    ] {
+    for (l, f) in UNITS {
         let q = grasp_testkit::rescale(&p, l, f);
         let at = format!("lengths × {l:e}, forces × {f:e}");
         for (n, a) in by_sides(&q, &[4, 8, 16, 32, 64]) {
