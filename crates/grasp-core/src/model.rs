@@ -826,26 +826,42 @@ impl GraspModel {
         }
         // A zero row's target (a wrench component no contact can apply, a torque no
         // contact resists) is scaled as its block's rows are: the unreachable check then
-        // reads it in their units.
+        // reads it in their units. A zero torque row pins its joint, `τ_j = −τ_p,j`,
+        // through the column of C that its scale makes, and C's rounding reaches τ_j
+        // divided by that scale. At the block's largest norm (5e7, beside rows of 0.04:
+        // `fuzz_answers.py` seed 296009) τ_j came out 4.5e-8 where it is 0, past its
+        // limit at 0, and in other units a fixed row's check called the grasp
+        // infeasible by 1.8e-8; at the smallest, the column outweighed the rest of C,
+        // and two grasps whose rows spread by 2e7 and 3e9 lost their answers (seeds
+        // 4803 and 3175). The geometric mean of the two keeps τ_j's rounding within
+        // the square root of the spread of any other torque's, either way.
         let block_of = |i: usize| match i {
             0..3 => 0,
             3..6 => 1,
             _ if i < 6 + k => 2,
             _ => 3,
         };
-        let mut block_max = [0.0f64; 4];
+        let (mut block_max, mut block_min) = ([0.0f64; 4], [f64::INFINITY; 4]);
         for (i, &nrm) in row_norms.iter().enumerate() {
-            block_max[block_of(i)] = block_max[block_of(i)].max(nrm);
+            let b = block_of(i);
+            block_max[b] = block_max[b].max(nrm);
+            if nrm > 0.0 {
+                block_min[b] = block_min[b].min(nrm);
+            }
         }
+        let zero_row_norm = |b: usize| match b {
+            3 => (block_min[b] * block_max[b]).sqrt(),
+            _ => block_max[b],
+        };
         let decomposed = |equilibrate: bool| {
             let r: Vec<f64> = row_norms
                 .iter()
                 .enumerate()
                 .map(
-                    |(i, &nrm)| match (equilibrate, nrm > 0.0, block_max[block_of(i)]) {
+                    |(i, &nrm)| match (equilibrate, nrm > 0.0, zero_row_norm(block_of(i))) {
                         (false, ..) => 1.0,
                         (true, true, _) => 1.0 / nrm,
-                        (true, false, b) if b > 0.0 => 1.0 / b,
+                        (true, false, b) if b > 0.0 && b.is_finite() => 1.0 / b,
                         _ => 1.0,
                     },
                 )

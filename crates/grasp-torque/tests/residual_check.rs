@@ -483,6 +483,56 @@ fn a_key_set_meeting_beyond_its_rounding_is_no_answer() {
     }
 }
 
+/// A joint whose row of Jᵀ the model zeroes is pinned to 0 by the consistency rows,
+/// through the column of C that its zero row's scale makes: seed 296009
+/// (`fixtures/fuzz/zeroed-joint-beside-a-row-of-5e7.json`), whose joint 10 has an upper
+/// limit of 0 beside a row of 5e7, had τ₁₀ = 4.5e-8 at the block's largest norm (the
+/// linear answer refused, the exact one failing its certificate, and one system of
+/// units `infeasible`). In every system of units of [`UNITS`] both are optimal, τ₁₀ is 0
+/// to the torques' rounding times the square root of the rows' spread, and σ is Clarabel's (the exported QP through cvxpy at N =
+/// 8, the Clarabel backend on the exact cones) to its 1e-8.
+#[test]
+fn a_zeroed_joint_beside_a_long_row_is_pinned_to_its_torque() {
+    let p = fuzz_fixture("zeroed-joint-beside-a-row-of-5e7");
+    let (linear_oracle, exact_oracle) = (1.4363460513660298, 1.3441349491110557);
+    // The spread of the rows of Jᵀ: the zero row's scale, their geometric mean's, leaves
+    // τ₁₀ the rounding of the torques times its square root at most.
+    let norms = (0..p.jacobian_transpose.nrows())
+        .map(|i| grasp_torque::matrix::norm2(p.jacobian_transpose.row(i)));
+    let (lo, hi) = norms.fold((f64::INFINITY, 0.0f64), |(l, h), v| (l.min(v), h.max(v)));
+    let spread = hi / lo;
+    for (l, f) in UNITS {
+        let q = grasp_testkit::rescale(&p, l, f);
+        let at = format!("lengths × {l:e}, forces × {f:e}");
+        let k2 = (l * f).powi(2);
+        let exact = solved_exact(&q);
+        let answers = by_sides(&q, &[4, 8, 16]);
+        for (n, a) in answers
+            .iter()
+            .map(|(n, a)| (n.to_string(), a))
+            .chain([("exact".into(), &exact)])
+        {
+            assert_eq!(a.status, Status::Optimal, "{at}, N = {n}: {:?}", a.reason);
+            let tmax = a.torque.iter().fold(0.0f64, |m, t| m.max(t.abs()));
+            let rounding = a.torque.len() as f64 * f64::EPSILON * spread.sqrt() * tmax;
+            assert!(
+                a.torque[10].abs() <= rounding,
+                "{at}, N = {n}: τ₁₀ {}",
+                a.torque[10]
+            );
+        }
+        for (sigma, oracle, what) in [
+            (answers[1].1.objective / k2, linear_oracle, "N = 8"),
+            (exact.objective / k2, exact_oracle, "exact"),
+        ] {
+            assert!(
+                (sigma - oracle).abs() <= 1e-8 * oracle,
+                "{at}, {what}: σ {sigma} against Clarabel's {oracle}"
+            );
+        }
+    }
+}
+
 /// A proof from rows independent beyond their rounding whose iteration with rows
 /// counted independent to 1e-13 ends at a point that misses a row stands: seed 3238
 /// (`fixtures/fuzz/infeasible-beside-rows-near-dependence.json`) is infeasible by
