@@ -202,7 +202,8 @@ pub const RESIDUAL_TOLERANCE: f64 = 1e-8;
 
 /// The largest bound on σ's excess over the optimum, relative, at which an
 /// interior-point answer that fails its certificate only on the gap, or stopped short
-/// with a gap that bounds σ no closer, is `almost_optimal` ([`grasp_core::conic::Certificate::almost`]).
+/// with a gap that bounds σ no closer, is `almost_optimal`
+/// ([`grasp_core::conic::Certificate::almost`]).
 pub(crate) const ALMOST_EXCESS: f64 = 1e-6;
 
 /// The warning of an `almost_optimal` answer: `what`'s bound on σ's excess.

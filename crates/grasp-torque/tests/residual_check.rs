@@ -457,8 +457,9 @@ fn a_proof_from_rows_parallel_beyond_their_rounding_is_not_final() {
 /// (`fixtures/fuzz/rows-meeting-beyond-their-rounding.json`), which Clarabel proves
 /// infeasible, was `optimal` at torques of 1e13 with the object's equilibrium missed by
 /// 24 against a load of 10 (the core's check, against forces of 5e16, passed it). At
-/// every N and in every system of units of [`UNITS`] the linear answer is now `infeasible` or
-/// `numerical_failure`, never an optimum, and the exact cones' is `infeasible`.
+/// every N and in every system of units of [`UNITS`] the linear answer is now
+/// `infeasible` or `numerical_failure`, never an optimum, and the exact cones' is
+/// `infeasible`.
 #[test]
 fn a_key_set_meeting_beyond_its_rounding_is_no_answer() {
     let p = fuzz_fixture("rows-meeting-beyond-their-rounding");
@@ -489,8 +490,9 @@ fn a_key_set_meeting_beyond_its_rounding_is_no_answer() {
 /// limit of 0 beside a row of 5e7, had τ₁₀ = 4.5e-8 at the block's largest norm (the
 /// linear answer refused, the exact one failing its certificate, and one system of
 /// units `infeasible`). In every system of units of [`UNITS`] both are optimal, τ₁₀ is 0
-/// to the torques' rounding times the square root of the rows' spread, and σ is Clarabel's (the exported QP through cvxpy at N =
-/// 8, the Clarabel backend on the exact cones) to its 1e-8.
+/// to the torques' rounding times the square root of the rows' spread, and σ is
+/// Clarabel's (the exported QP through cvxpy at N = 8, the Clarabel backend on the exact
+/// cones) to its 1e-8.
 #[test]
 fn a_zeroed_joint_beside_a_long_row_is_pinned_to_its_torque() {
     let p = fuzz_fixture("zeroed-joint-beside-a-row-of-5e7");
