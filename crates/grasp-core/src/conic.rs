@@ -738,6 +738,62 @@ impl ConicForm {
         xi.extend((0..d).map(|j| x[m + j] * alpha / self.col_scale[m + j]));
     }
 
+    /// The largest violation of `s = b − A x` in K but on the torque limits' rows,
+    /// each against the size of the terms `t(i)` of row i: the equalities' against the
+    /// largest over every row but the limits', whose constants are in torque units and
+    /// may be loose by any factor (1e9 for "no limit": a point 83 N outside a cone
+    /// passed, sweep seed 27); the contacts' rows against the largest of theirs, S, as
+    /// the core's check judges forces against the largest force. (Against every row,
+    /// a contact whose force the wrench alone fixes, 5e-3 outside its cone, passed
+    /// beside equalities 1e7 times its terms, moved there by a torque of 1.7e7 through
+    /// rounding: `fuzz_answers.py` seed 314274.) A second-order cone is judged against
+    /// the larger of S and its terms as its ray of the dual reads them ([`Self::dual_ray`]
+    /// with `z = (1, −s_t/‖s_t‖)`), so that where the equalities admit one point, the
+    /// ray proves every miss this refuses.
+    fn primal_excess(&self, s: &[f64], t: impl Fn(usize) -> f64) -> f64 {
+        let eq = match self.cones.first() {
+            Some(&ConeKind::Zero(p)) => p,
+            _ => 0,
+        };
+        let (mut scale, mut force) = (f64::MIN_POSITIVE, f64::MIN_POSITIVE);
+        for i in (0..self.rows()).filter(|i| !self.limit_rows.contains(i)) {
+            let ti = t(i);
+            if i >= eq {
+                force = fmax(force, ti);
+            }
+            scale = fmax(scale, ti);
+        }
+        let mut primal = 0.0f64;
+        let mut start = 0;
+        for cone in &self.cones {
+            let r = start..start + cone.dim();
+            start = r.end;
+            match *cone {
+                ConeKind::Zero(_) => {
+                    for i in r {
+                        primal = fmax(primal, s[i].abs() / scale);
+                    }
+                }
+                ConeKind::Nonnegative(_) => {
+                    for i in r.filter(|i| !self.limit_rows.contains(i)) {
+                        primal = fmax(primal, -s[i] / force);
+                    }
+                }
+                ConeKind::SecondOrder(_) => {
+                    let (h, tail) = (r.start, r.start + 1..r.end);
+                    let excess = soc_excess(s[h], &s[tail.clone()]);
+                    if excess > 0.0 {
+                        // ‖s_t‖, past the head by the excess.
+                        let norm = (excess + s[h]).max(f64::MIN_POSITIVE);
+                        let own = t(h) + tail.map(|i| t(i) * s[i].abs() / norm).sum::<f64>();
+                        primal = fmax(primal, excess / fmax(force, own));
+                    }
+                }
+            }
+        }
+        primal
+    }
+
     /// Checks from scratch that `(x, z)` is an optimal primal-dual pair of the scaled
     /// problem with right-hand side `b`, to relative tolerance `tol`:
     /// - primal feasibility: `s = b − A x` in K (the equalities `s_E = 0` included);
@@ -776,35 +832,23 @@ impl ConicForm {
             Some(&ConeKind::Zero(p)) => p,
             _ => 0,
         };
-        let (mut primal, mut dual) = (0.0f64, 0.0f64);
+        let mut dual = 0.0f64;
         let mut start = 0;
         for cone in &self.cones {
             let r = start..start + cone.dim();
+            start = r.end;
             match *cone {
-                ConeKind::Zero(_) => {
-                    for i in r {
-                        primal = fmax(primal, s[i].abs());
-                    }
-                }
+                ConeKind::Zero(_) => {}
                 ConeKind::Nonnegative(_) => {
-                    for i in r {
-                        if !self.limit_rows.contains(&i) {
-                            primal = fmax(primal, -s[i]);
-                        }
-                        if !self.fixed[i] {
-                            dual = fmax(dual, -z[i]);
-                        }
+                    for i in r.filter(|&i| !self.fixed[i]) {
+                        dual = fmax(dual, -z[i]);
                     }
                 }
-                ConeKind::SecondOrder(_) => {
-                    let (h, t) = (r.start, r.start + 1..r.end);
-                    primal = fmax(primal, soc_excess(s[h], &s[t.clone()]));
-                    if !self.fixed[h] {
-                        dual = fmax(dual, soc_excess(z[h], &z[t]));
-                    }
+                ConeKind::SecondOrder(_) if !self.fixed[r.start] => {
+                    dual = fmax(dual, soc_excess(z[r.start], &z[r.start + 1..r.end]));
                 }
+                ConeKind::SecondOrder(_) => {}
             }
-            start += cone.dim();
         }
         // The measures below read z in K*: a z outside it, projected there. The
         // projection is itself a multiplier, so that the gap's bound on σ holds for it
@@ -841,21 +885,6 @@ impl ConicForm {
         let (residual, colsize, basis_ok) = self.torque_terms(z, eq, grad, gsize);
         let stationarity = residual / colsize;
         let finite = finite && basis_ok;
-        // Primal violation against the size of its terms, |b_i| + Σ_j |a_ij x_j|, over
-        // every row but the torque limits'. Its lower bound max(|b_i|, |(A x)_i|) is
-        // formed first: a violation within tolerance of that is within tolerance of the
-        // terms, and only a point that fails it pays for the second pass, |A| |x|. A
-        // limit's constant is in torque units and may be loose by any factor (1e9 for
-        // "no limit"): it must not set the scale of the force rows (a limit of 1e9 let
-        // a point 83 N outside a cone pass, sweep seed 27), so each limit row is judged
-        // on its own below.
-        let limits = self.limit_rows.clone();
-        let mut scale = f64::MIN_POSITIVE;
-        for (i, (bi, si)) in b.iter().zip(s.iter()).enumerate() {
-            if !limits.contains(&i) {
-                scale = fmax(scale, fmax(bi.abs(), (bi - si).abs()));
-            }
-        }
         // |b_i| + Σ_j |a_ij x_j| per row, formed once and only when a measure needs it.
         let mut sized = false;
         let mut row_sizes = |size: &mut [f64]| {
@@ -869,20 +898,21 @@ impl ConicForm {
                 add_columns(size, &self.abs_cols, xabs, 1.0);
             }
         };
-        if primal > tol * scale {
+        // The primal violation ([`Self::primal_excess`]) against its terms' lower bound
+        // |b_i| + |(A x)_i| first: a violation within tolerance of that is within
+        // tolerance of the terms, and only a point that fails it pays for the second
+        // pass, |A| |x|.
+        let mut primal = self.primal_excess(s, |i| b[i].abs() + (b[i] - s[i]).abs());
+        if primal > tol {
             row_sizes(size);
-            for (i, v) in size.iter().enumerate() {
-                if !limits.contains(&i) {
-                    scale = fmax(scale, *v);
-                }
-            }
+            let size = &*size;
+            primal = self.primal_excess(s, |i| size[i]);
         }
-        let mut primal = primal / scale;
         // A limit row against its own terms, |b_i| + ‖a_i‖₁ ‖x_τ‖∞: its torque comes out
         // of the linear algebra with an error relative to the largest (the core's
         // check reads τ so too), and a bound at 0 has no other term.
         let xmax = x[..m].iter().fold(0.0f64, |a, v| fmax(a, v.abs()));
-        for i in limits.filter(|&i| s[i] < 0.0) {
+        for i in self.limit_rows.clone().filter(|&i| s[i] < 0.0) {
             let (lo, hi) = self.row_span[i];
             let row: f64 = self.a_padded.row(i)[lo..hi].iter().map(|v| v.abs()).sum();
             let size = (b[i].abs() + row * xmax).max(f64::MIN_POSITIVE);

@@ -647,3 +647,32 @@ fn an_answer_states_how_far_its_rows_rounding_moves_sigma() {
         );
     }
 }
+
+/// A contact whose force the wrench alone fixes, outside its exact cone, makes the
+/// grasp infeasible whatever the torques: seed 314274
+/// (`fixtures/fuzz/contact-fixed-by-the-wrench-beside-a-long-row.json`), with a row of
+/// Jᵀ 6e6 times the others', was answered by the exact cones' closed form at a torque
+/// of 1.7e7 whose rounding moved the contact toward its cone, and the certificate
+/// passed the miss against the equalities' terms, 1e7 times the contact's (the core's
+/// check refused it: `numerical_failure`). In every system of units of [`UNITS`] the
+/// polyhedra and the exact cones now prove it infeasible, the exact cones by a ray of
+/// the dual, as Clarabel does.
+#[test]
+fn a_contact_the_wrench_fixes_outside_its_cone_is_infeasible() {
+    let p = fuzz_fixture("contact-fixed-by-the-wrench-beside-a-long-row");
+    for (l, f) in UNITS {
+        let q = grasp_testkit::rescale(&p, l, f);
+        let at = format!("lengths × {l:e}, forces × {f:e}");
+        for (n, a) in by_sides(&q, &[4, 8, 16, 32, 64]) {
+            assert_eq!(a.status, Status::Infeasible, "{at}, N = {n}: {:?}", a.reason);
+        }
+        let exact = solved_exact(&q);
+        assert!(
+            exact.status == Status::Infeasible
+                && matches!(exact.reason, Some(Reason::DualRay { value, .. }) if value < -1e-6),
+            "{at}, exact: {:?} {:?}",
+            exact.status,
+            exact.reason
+        );
+    }
+}
