@@ -1261,10 +1261,7 @@ mod tests {
             // Stationarity needs no multipliers of the equalities: with the
             // least-squares ones the full residual P x + Aᵀ z vanishes too.
             let (rows, nx) = (s.conic.rows(), s.conic.nx);
-            let eq = match s.conic.cones.first() {
-                Some(&grasp_core::ConeKind::Zero(d)) => d,
-                _ => 0,
-            };
+            let eq = s.conic.equalities();
             let mut g: Vec<f64> = (0..nx)
                 .map(|j| if j < s.conic.joints { 2.0 * x[j] } else { 0.0 })
                 .collect();

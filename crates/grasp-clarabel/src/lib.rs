@@ -224,10 +224,7 @@ impl ClarabelSolver {
             Some(s) => s.solution.z.clone(),
             None => return Err("no multipliers".into()),
         };
-        let eq = match c.cones.first() {
-            Some(&ConeKind::Zero(p)) => p,
-            _ => 0,
-        };
+        let eq = c.equalities();
         // The equalities' null space must be known to judge the torque terms.
         if c.eq_null_t.as_ref().is_some_and(|nt| nt.ncols() != c.nx) {
             return Err("the equalities could not be decomposed".into());
@@ -344,10 +341,7 @@ impl ClarabelSolver {
         let Some(sol) = self.solver.as_ref().map(|s| &s.solution) else {
             return false;
         };
-        let eq = match c.cones.first() {
-            Some(&ConeKind::Zero(p)) => p,
-            _ => 0,
-        };
+        let eq = c.equalities();
         let finite = |v: &[f64]| v.iter().all(|v| v.is_finite());
         if c.free > 0
             || c.cones

@@ -507,6 +507,14 @@ impl ConicForm {
         self.a.nrows()
     }
 
+    /// Number of equality rows: the zero cone's, first.
+    pub fn equalities(&self) -> usize {
+        match self.cones.first() {
+            Some(&ConeKind::Zero(p)) => p,
+            _ => 0,
+        }
+    }
+
     /// `b(w)` into `out`; returns its magnitude α = ‖b(w)‖∞ over every row but the
     /// torque limits' that x = 0 meets, by which `out` is then divided (unless it is 0:
     /// every row homogeneous, τ = 0 optimal). A loose limit (1e6 times the torques) set the scale
@@ -616,10 +624,7 @@ impl ConicForm {
         }
         let (sp, rest) = scratch.split_at_mut(rows);
         let (grad, gsize) = rest[..2 * w4].split_at_mut(w4);
-        let eq = match self.cones.first() {
-            Some(&ConeKind::Zero(p)) => p,
-            _ => 0,
-        };
+        let eq = self.equalities();
         // s_p = b − A x_p: zero on the equalities, the value's terms on the rest.
         sp.copy_from_slice(&b[..rows]);
         add_columns(sp, &self.a_cols, &xp[..nx], -1.0);
@@ -751,10 +756,7 @@ impl ConicForm {
     /// with `z = (1, −s_t/‖s_t‖)`), so that where the equalities admit one point, the
     /// ray proves every miss this refuses.
     fn primal_excess(&self, s: &[f64], t: impl Fn(usize) -> f64) -> f64 {
-        let eq = match self.cones.first() {
-            Some(&ConeKind::Zero(p)) => p,
-            _ => 0,
-        };
+        let eq = self.equalities();
         let (mut scale, mut force) = (f64::MIN_POSITIVE, f64::MIN_POSITIVE);
         for i in (0..self.rows()).filter(|i| !self.limit_rows.contains(i)) {
             let ti = t(i);
@@ -828,10 +830,7 @@ impl ConicForm {
         // s = b − A x.
         s.copy_from_slice(&b[..rows]);
         add_columns(s, &self.a_cols, &x[..nx], -1.0);
-        let eq = match self.cones.first() {
-            Some(&ConeKind::Zero(p)) => p,
-            _ => 0,
-        };
+        let eq = self.equalities();
         let mut dual = 0.0f64;
         let mut start = 0;
         for cone in &self.cones {

@@ -664,7 +664,12 @@ fn a_contact_the_wrench_fixes_outside_its_cone_is_infeasible() {
         let q = grasp_testkit::rescale(&p, l, f);
         let at = format!("lengths × {l:e}, forces × {f:e}");
         for (n, a) in by_sides(&q, &[4, 8, 16, 32, 64]) {
-            assert_eq!(a.status, Status::Infeasible, "{at}, N = {n}: {:?}", a.reason);
+            assert_eq!(
+                a.status,
+                Status::Infeasible,
+                "{at}, N = {n}: {:?}",
+                a.reason
+            );
         }
         let exact = solved_exact(&q);
         assert!(
