@@ -271,6 +271,8 @@ struct Fallback {
     conic: ConicForm,
     ipm: ipm::Ipm,
     b: Vec<f64>,
+    /// A point meeting the equalities, `E⁺ b_E`, for a ray of the dual.
+    xp: Vec<f64>,
     dual: Vec<f64>,
     scratch: Vec<f64>,
 }
@@ -911,23 +913,56 @@ impl TorqueSolver for ActiveSetSolver {
         // A proof that rules out only the torques near its point: the interior-point
         // method, which follows no key set, answers where it certifies an optimum;
         // else the iteration again with rows counted independent down to a finer
-        // tolerance, where its optimum holds.
+        // tolerance, where its optimum holds; else the method's multipliers, where
+        // they grew along a ray of the dual, prove the grasp infeasible. (A ray proves
+        // it only for the torques within its horizon: one of value −1 called
+        // `squeezed-by-torques-of-1e8.json` infeasible at N = 16, where the finer
+        // iteration holds it.) Failing all three, the proof is no answer:
+        // `fuzz_answers.py` seed 319014, held only by torques of 3e10 where two nearly
+        // opposite faces meet, was `infeasible` by such a proof in the systems of
+        // units where the method stalled.
         if out.status == Status::Infeasible && self.engine.local_proof {
             let (reason, iterations) = (out.reason.take(), out.iterations);
-            if self.solve_fallback(w, out) && out.status == Status::Optimal {
+            let warnings = out.warnings.len();
+            let ray = match self.interior_point(w, true, out) {
+                Ok(()) if out.status == Status::Optimal => {
+                    out.iterations += iterations;
+                    out.warnings.push(
+                        "active-set's proof of infeasibility held only near its own point \
+                         (rows independent beyond their rounding); this answer is its \
+                         interior-point method's"
+                            .into(),
+                    );
+                    return;
+                }
+                Ok(()) => {
+                    out.warnings.truncate(warnings);
+                    None
+                }
+                Err(ray) => ray,
+            };
+            let ipm_iterations = self.fallback.as_ref().map_or(0, |f| f.ipm.iterations);
+            if self.solve_fine_dependence(w, out) {
                 out.iterations += iterations;
-                out.warnings.push(
-                    "active-set's proof of infeasibility held only near its own point \
-                     (rows independent beyond their rounding); this answer is its \
-                     interior-point method's"
-                        .into(),
-                );
-            } else if self.solve_fine_dependence(w, out) {
-                out.iterations += iterations;
-            } else {
+            } else if let Some(ray) = ray {
                 out.status = Status::Infeasible;
-                out.reason = reason;
+                out.reason = Some(ray);
                 out.active_set = None;
+                out.torque.clear();
+                out.iterations = iterations + ipm_iterations;
+                out.method = Some("interior_point");
+            } else {
+                out.status = Status::NumericalFailure;
+                out.reason = Some(Reason::Backend {
+                    backend: "active-set",
+                    message: format!(
+                        "a proof of infeasibility that holds only near its own point (rows independent beyond their rounding: {}), which neither the interior-point method (no optimum, no ray of the dual) nor the iteration with rows counted independent down to {:.0e} of their norm settled",
+                        reason.map_or_else(String::new, |r| r.to_string()),
+                        self.engine.settings.dependence_tolerance * FINE_DEPENDENCE,
+                    ),
+                });
+                out.active_set = None;
+                out.torque.clear();
                 out.iterations = iterations;
             }
         }
@@ -937,12 +972,28 @@ impl TorqueSolver for ActiveSetSolver {
     /// scratch ([`ConicForm::certificate`]). `false` where it does not converge to a
     /// certified answer (it proves no infeasibility).
     fn solve_fallback(&mut self, w: &[f64; 6], out: &mut Solution) -> bool {
+        self.interior_point(w, false, out).is_ok()
+    }
+}
+
+impl ActiveSetSolver {
+    /// [`TorqueSolver::solve_fallback`]: `Ok` where it fills `out` with a certified
+    /// answer; else `Err`, with `rays` the first ray of the dual its multipliers grew
+    /// along, if any ([`ConicForm::dual_ray`], checked at each iterate from the
+    /// equalities' point `E⁺ b_E`, as the exact cones' method proves infeasibility).
+    fn interior_point(
+        &mut self,
+        w: &[f64; 6],
+        rays: bool,
+        out: &mut Solution,
+    ) -> Result<(), Option<Reason>> {
         let qp = &self.qp;
         let f = self.fallback.get_or_insert_with(|| {
             let conic = ConicForm::new(qp);
             let ipm = ipm::Ipm::new(&conic, ipm::IpmSettings::default());
             let rows = conic.rows();
             Box::new(Fallback {
+                xp: vec![0.0; conic.nx],
                 conic,
                 ipm,
                 b: vec![0.0; rows],
@@ -952,12 +1003,37 @@ impl TorqueSolver for ActiveSetSolver {
         });
         let alpha = f.conic.b_into(w, &mut f.b);
         if alpha == 0.0 {
-            return false;
+            return Err(None);
         }
-        let end = f.ipm.solve(&f.conic, &f.b, &mut |_| false);
+        let eq = f.conic.equalities();
+        let rays = rays
+            && match &f.conic.eq_pinv {
+                Some(pinv) => {
+                    for (j, x) in f.xp.iter_mut().enumerate() {
+                        *x = dot(&pinv.row(j)[..eq], &f.b[..eq]);
+                    }
+                    true
+                }
+                None => eq == 0,
+            };
+        let mut ray = None;
+        let (conic, b, xp) = (&f.conic, &f.b, &f.xp);
+        let (dual, scratch) = (&mut f.dual, &mut f.scratch);
+        // (The run goes on past a ray: an optimum further on is the answer.)
+        let end = f.ipm.solve(conic, b, &mut |ipm| {
+            if rays && ray.is_none() {
+                ipm.dual_into(conic, dual);
+                let r = conic.dual_ray(b, xp, dual, CERTIFICATE_TOLERANCE, scratch);
+                ray = r.passed.then_some(Reason::DualRay {
+                    value: r.value,
+                    stationarity: r.stationarity,
+                });
+            }
+            false
+        });
         if !matches!(end, ipm::IpmEnd::Converged) {
             if !f.ipm.best_merit.is_finite() {
-                return false;
+                return Err(ray);
             }
             f.ipm.restore_best();
         }
@@ -982,7 +1058,7 @@ impl TorqueSolver for ActiveSetSolver {
                 .push(almost_warning("the interior-point answer", c.excess));
             Status::AlmostOptimal
         } else {
-            return false;
+            return Err(ray);
         };
         out.reason = None;
         out.active_set = None;
@@ -994,7 +1070,7 @@ impl TorqueSolver for ActiveSetSolver {
             &mut out.torque,
             &mut out.internal_forces,
         );
-        true
+        Ok(())
     }
 }
 

@@ -116,11 +116,12 @@ pub enum Reason {
         /// Why the circumscribed problem is infeasible.
         cause: Box<Reason>,
     },
-    /// A ray of the exact problem's dual (a Farkas certificate): multipliers `z` in the
-    /// dual cones whose combination of the constraint rows has no torque terms (to
-    /// `stationarity`) and a negative right-hand side, `zᵀ(b − A x) = value < 0` for
-    /// every torque meeting the equalities, although a feasible torque would make it
-    /// `zᵀ s ≥ 0`. Checked from scratch ([`crate::ConicForm::dual_ray`]).
+    /// A ray of the problem's dual, on the exact cones or the polyhedra (a Farkas
+    /// certificate): multipliers `z` in the dual cones whose combination of the
+    /// constraint rows has no torque terms (to `stationarity`) and a negative
+    /// right-hand side, `zᵀ(b − A x) = value < 0` for every torque meeting the
+    /// equalities, although a feasible torque would make it `zᵀ s ≥ 0`. Checked from
+    /// scratch ([`crate::ConicForm::dual_ray`]).
     DualRay {
         /// `value` against the size of its terms (negative).
         value: f64,
@@ -181,7 +182,7 @@ impl fmt::Display for Reason {
             ),
             Reason::DualRay { value, stationarity } => write!(
                 f,
-                "no torque keeps every contact force inside its exact cone while balancing the wrench: multipliers in the dual cones combine the constraints into 0 ≤ {value:.3e} (relative; a Farkas certificate, torque terms cancelled to {stationarity:.1e})"
+                "no torque keeps every contact force inside its cone while balancing the wrench: multipliers in the dual cones combine the constraints into 0 ≤ {value:.3e} (relative; a Farkas certificate, torque terms cancelled to {stationarity:.1e})"
             ),
             Reason::Backend { backend, message } => write!(f, "{backend}: {message}"),
         }

@@ -535,19 +535,21 @@ fn a_zeroed_joint_beside_a_long_row_is_pinned_to_its_torque() {
     }
 }
 
-/// A proof from rows independent beyond their rounding whose iteration with rows
-/// counted independent to 1e-13 ends at a point that misses a row stands: seed 3238
+/// A proof from rows independent beyond their rounding, whose iteration with rows
+/// counted independent to 1e-13 ends at a point that misses a row, is decided by the
+/// interior-point method's ray of the dual: seed 3238
 /// (`fixtures/fuzz/infeasible-beside-rows-near-dependence.json`) is infeasible by
 /// Clarabel and SCS on the exported QP, and by the exact cones' dual ray; the point
 /// was σ 6e22 with a row missed by 1.8e7 times its bound.
 #[test]
-fn a_local_proof_stands_where_the_finer_iteration_misses_a_row() {
+fn a_ray_of_the_dual_decides_where_the_finer_iteration_misses_a_row() {
     let p = fuzz_fixture("infeasible-beside-rows-near-dependence");
     let s = solved(&p, &SolverConfig::default());
-    assert_eq!(
+    assert!(
+        s.status == Status::Infeasible
+            && matches!(s.reason, Some(Reason::DualRay { value, .. }) if value < -1e-6),
+        "{:?} {:?} {:?}",
         s.status,
-        Status::Infeasible,
-        "{:?} {:?}",
         s.reason,
         s.warnings
     );
@@ -680,4 +682,77 @@ fn a_contact_the_wrench_fixes_outside_its_cone_is_infeasible() {
             exact.reason
         );
     }
+}
+
+/// A grasp held only by torques of 3e10 (`fixtures/fuzz/held-only-by-torques-of-3e10.json`,
+/// `fuzz_answers.py` seed 319014: a row of Jᵀ 1e8 times the others'), where two nearly
+/// opposite faces meet. The iteration's proof of infeasibility from them holds only near
+/// its point, and the interior-point method, which answers in some systems of units,
+/// stalls in others (lengths × 122, forces × 43.4 among them), where the proof stood:
+/// both views were `infeasible`. Clarabel, SCS and DAQP on the exported QP call it
+/// infeasible too, but the native answer holds every row to 1.6e-16 of its terms. In
+/// every system of units of [`UNITS`] and that one, no answer is now `infeasible` (a
+/// proof that holds only near its point is `numerical_failure` unless the method's
+/// multipliers grow along a ray of the dual); every answer σ at N = 8, 16 and 32 is the
+/// same in every system to 1e-9 and falls as N grows; the exact cones answer in each,
+/// to their stated bound; and σ* lies below the polyhedra with the SFCe contact's
+/// latitudes refined, within 2e-3 of them (N = 128, 64 latitudes: they converge on the
+/// cone).
+#[test]
+fn a_proof_that_holds_only_near_its_point_is_no_answer() {
+    let p = fuzz_fixture("held-only-by-torques-of-3e10");
+    let units = UNITS
+        .iter()
+        .copied()
+        .chain([(122.05561425491729, 43.41573857120869)]);
+    let sides = [8, 16, 32];
+    // Per N, then exact: σ / k² of the first answer.
+    let mut first = [None::<f64>; 4];
+    for (l, f) in units {
+        let q = grasp_testkit::rescale(&p, l, f);
+        let at = format!("lengths × {l:e}, forces × {f:e}");
+        let k2 = (l * f).powi(2);
+        let mut answers: Vec<(String, Solution)> = by_sides(&q, &sides)
+            .into_iter()
+            .map(|(n, a)| (format!("N = {n}"), a))
+            .collect();
+        answers.push(("exact".into(), solved_exact(&q)));
+        for (i, (n, a)) in answers.iter().enumerate() {
+            assert!(
+                matches!(a.status, Status::Optimal | Status::NumericalFailure)
+                    || (i == 3 && a.status == Status::AlmostOptimal),
+                "{at}, {n}: {:?} {:?}",
+                a.status,
+                a.reason
+            );
+            if !a.status.has_answer() {
+                continue;
+            }
+            let sigma = a.objective / k2;
+            let want = *first[i].get_or_insert(sigma);
+            assert!(
+                (sigma - want).abs() <= (1e-9 + stated_excess(a)) * want,
+                "{at}, {n}: σ {sigma} against {want}"
+            );
+        }
+        assert!(
+            answers[3].1.status.has_answer(),
+            "{at}: exact {:?}",
+            answers[3].1.reason
+        );
+    }
+    let [Some(s8), Some(s16), Some(s32), Some(star)] = first else {
+        panic!("a view answered in no system of units: {first:?}");
+    };
+    assert!(star <= s32 && s32 <= s16 && s16 <= s8, "{first:?}");
+    let mut fine = p.clone();
+    fine.linearization.sides = 128;
+    fine.linearization.latitudes = 64;
+    let upper = solved(&fine, &SolverConfig::default());
+    assert_eq!(upper.status, Status::Optimal, "{:?}", upper.reason);
+    assert!(
+        star <= upper.objective && upper.objective <= star * (1.0 + 2e-3),
+        "σ* {star} against the fine polyhedra's {}",
+        upper.objective
+    );
 }
