@@ -52,6 +52,13 @@ cones, and lists those Clarabel holds with every contact inside its cone (fricti
 margins above −1e-3: an answer within the check's tolerance of the largest force can
 leave a small contact well outside).
 
+`fuzz_answers.py joint-rows FROM COUNT` solves each of the main search's problems
+that the native solver calls infeasible (linear cones at the file's N, and exact; not
+an unreachable wrench) again with each joint's torque in a unit of its own (each row of
+Jᵀ divided by its largest entry, a row the model made zero left zero), with both
+backends, and lists those either holds with every contact inside its cone: the
+admissible forces are the same, so each is a false `infeasible`.
+
 `fuzz_answers.py nested FROM COUNT` solves each of the main search's problems with
 linear cones at N = 4, 8, 16, 32 and 64 and with exact cones, and lists every pair of
 runs where more sides (or the exact cones) give a higher optimal σ or call a grasp
@@ -476,6 +483,64 @@ def infeasible(start, count):
           f"Clarabel holds")
 
 
+def in_joint_rows(p, d):
+    """`p` with each joint's torque in a unit of its own: its row of Jᵀ divided by its
+    largest entry (its limits, passive torque and row of the transmission likewise), so that the rows are of
+    one size; the rows the model made zero in `d`'s answer (its warnings) zero. The
+    admissible forces are the same, so the grasp is feasible exactly where `p` is."""
+    q = json.loads(json.dumps(p))
+    names = d.get("joint_names") or []
+    zeroed = {w.split(":")[0] for w in d.get("warnings", []) if "the model makes it zero" in w}
+    JT = np.array(q["jacobian_transpose"], float)
+    s = np.ones(len(JT))
+    for j, row in enumerate(JT):
+        big = np.abs(row).max()
+        if j < len(names) and names[j] in zeroed:
+            JT[j] = 0.0
+        elif big > 0:
+            s[j] = 1 / big
+    q["jacobian_transpose"] = (JT * s[:, None]).tolist()
+    scale = lambda t, sj: None if t is None else t * sj
+    if "transmission" in q:
+        # Joint torques T u: its rows take the joints' units; the limits are the
+        # actuators'.
+        q["transmission"] = [[v * sj for v in row] for row, sj in zip(q["transmission"], s)]
+    elif "torque_limits" in q:
+        q["torque_limits"] = [[scale(x, sj) for x in t] if isinstance(t, list) else scale(t, sj)
+                              for t, sj in zip(q["torque_limits"], s)]
+    if "passive_torque" in q:
+        q["passive_torque"] = [v * sj for v, sj in zip(q["passive_torque"], s)]
+    q.pop("torque_weights", None)
+    return q
+
+
+def joint_rows(start, count):
+    """Seeds FROM.. of the main search that the native solver calls infeasible (linear
+    cones at the file's N, and exact), solved again with each joint's torque in a unit
+    of its own (`in_joint_rows`) by both backends: each held there with every contact
+    inside its cone is a false `infeasible`."""
+    bundled, infeasible_runs, held = sources(), 0, 0
+    for seed in range(start, start + count):
+        name, p, edits, rnd = seed_problem(bundled, seed)
+        for cones in ("linear", "exact"):
+            d = solve(p, cones)[0]
+            if not d or d["status"] != "infeasible" or d["reason"]["kind"] == "unreachable_wrench":
+                continue
+            infeasible_runs += 1
+            q = in_joint_rows(p, d)
+            for backend in ("active-set", "clarabel"):
+                e = solve(q, cones, "--backend", backend)[0]
+                if not e or e["status"] != "optimal":
+                    continue
+                margins = [m for m in e["diagnostics"].get("friction_margins", []) if m is not None]
+                if min(margins, default=0.0) > -1e-3:
+                    held += 1
+                    print(f"seed {seed} ({name}: {', '.join(edits)}) {cones}: infeasible "
+                          f"({d['reason']['kind']}), {backend} optimal in joint units at σ = {e['objective']}")
+                    break
+    print(f"{count} problems, {infeasible_runs} infeasible runs: {held} held in joint units")
+
+
 def spreads(start, count):
     """Seeds FROM.. of the main search: the answers that state a spread
     (`stated_spread`), linear at N = 8 and 16 and exact."""
@@ -586,6 +651,9 @@ def main():
         pinned_limits(int(sys.argv[2]), int(sys.argv[3]))
     if sys.argv[1] == "infeasible":
         infeasible(int(sys.argv[2]), int(sys.argv[3]))
+        sys.exit(0)
+    if sys.argv[1] == "joint-rows":
+        joint_rows(int(sys.argv[2]), int(sys.argv[3]))
         sys.exit(0)
     if sys.argv[1] == "spreads":
         spreads(int(sys.argv[2]), int(sys.argv[3]))

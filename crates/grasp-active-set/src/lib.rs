@@ -25,10 +25,12 @@
 
 use grasp_core::linalg::{decompose, orthonormal_columns, RankThreshold, ROW_SPREAD};
 use grasp_core::matrix::{add_columns, dot, min_value, norm_inf, write_columns};
+use grasp_core::solver::TORQUE_SPREAD_NOTE;
 use grasp_core::{
     Capabilities, ConicForm, EqFactors, ForceSpaceQp, InequalityRows, LeastDistance, Matrix,
     Reason, RowId, Solution, Status, TorqueQp, TorqueSolver, WarmStart,
 };
+use std::sync::Arc;
 
 mod dense;
 mod exact;
@@ -262,6 +264,13 @@ pub struct ActiveSetSolver {
     /// The interior-point method on the same polyhedra, built at the first answer the
     /// core's check refuses ([`TorqueSolver::solve_fallback`]).
     fallback: Option<Box<Fallback>>,
+    /// The same polyhedra with each joint's torque in a unit of its own, and the
+    /// answer it writes, built at the first need
+    /// ([`ActiveSetSolver::check_in_joint_units`]).
+    units: Option<Box<(Option<ActiveSetSolver>, Solution)>>,
+    /// Whether an `infeasible` answer is checked so: where the torques' scales are
+    /// more than [`TORQUE_SPREAD_NOTE`] apart, and not in that view itself.
+    unit_check: bool,
 }
 
 /// The interior-point method on the conic form of the linearised problem (its faces
@@ -383,7 +392,10 @@ impl ActiveSetSolver {
             qp,
             engine,
             fallback: None,
-        })
+            units: None,
+            unit_check: false,
+        }
+        .with_unit_check())
     }
 
     /// As [`Self::new`], with the equalities eliminated by `other` when `qp` has the
@@ -411,7 +423,10 @@ impl ActiveSetSolver {
             qp,
             engine,
             fallback: None,
-        })
+            units: None,
+            unit_check: false,
+        }
+        .with_unit_check())
     }
 
     /// As [`Self::new`] for a polyhedral view of the grasp of `form` (the exact view's
@@ -463,7 +478,21 @@ impl ActiveSetSolver {
             qp,
             engine,
             fallback: None,
-        })
+            units: None,
+            unit_check: false,
+        }
+        .with_unit_check())
+    }
+
+    /// With [`Self::check_in_joint_units`] where the torques' scales are more than
+    /// [`TORQUE_SPREAD_NOTE`] apart.
+    fn with_unit_check(mut self) -> Self {
+        if let Some([(_, big), (_, small)]) = self.qp.model.torque_spread() {
+            if big > TORQUE_SPREAD_NOTE * small {
+                self.unit_check = true;
+            }
+        }
+        self
     }
 
     /// The settings in use.
@@ -966,6 +995,9 @@ impl TorqueSolver for ActiveSetSolver {
                 out.iterations = iterations;
             }
         }
+        if out.status == Status::Infeasible && self.unit_check {
+            self.check_in_joint_units(w, out);
+        }
     }
 
     /// The interior-point method on the same polyhedra, its iterate certified from
@@ -977,6 +1009,65 @@ impl TorqueSolver for ActiveSetSolver {
 }
 
 impl ActiveSetSolver {
+    /// An `infeasible` answer checked with each joint's torque in a unit of its own
+    /// ([`grasp_core::GraspModel::equilibrated`]: the same polyhedra, only the
+    /// objective's weights changed). Where the torques' scales are far apart, the
+    /// smaller torques' entries in a row are below its rounding, and a proof their
+    /// rounding made can be false: `fuzz_answers.py` seed 297974 (scales 1.3e15 apart)
+    /// was `infeasible` at N = 4 and 8, and with exact cones by the circumscribed
+    /// polyhedra, where the same grasp with each row of Jᵀ of norm 1 is optimal for
+    /// both backends. Where this view holds the grasp, the answer is the
+    /// interior-point method's if it certifies one (the method is invariant to the
+    /// torques' units), else `numerical_failure`.
+    #[cold]
+    fn check_in_joint_units(&mut self, w: &[f64; 6], out: &mut Solution) {
+        let mut units = self.units.take().unwrap_or_default();
+        let (view, answer) = &mut *units;
+        if view.is_none() {
+            let model = Arc::new(self.qp.model.equilibrated());
+            let qp = TorqueQp::new(model, self.qp.constraints.clone());
+            *view = Self::new(qp, self.engine.settings).ok().map(|mut v| {
+                v.unit_check = false;
+                v
+            });
+        }
+        let held = view.as_mut().is_some_and(|v| {
+            v.solve_raw(w, &WarmStart::default(), answer);
+            answer.status == Status::Optimal
+        });
+        self.units = Some(units);
+        if !held {
+            return;
+        }
+        let (reason, iterations) = (out.reason.take(), out.iterations);
+        let spread = self
+            .qp
+            .model
+            .torque_spread()
+            .map_or(0.0, |[(_, big), (_, small)]| big / small);
+        let warnings = out.warnings.len();
+        if self.interior_point(w, false, out).is_ok() {
+            out.iterations += iterations;
+            out.warnings.push(format!(
+                "active-set proved this grasp infeasible with the torques' scales {spread:.1e} apart, and with each joint's torque in a unit of its own found it feasible; this answer is its interior-point method's"
+            ));
+            return;
+        }
+        out.warnings.truncate(warnings);
+        out.status = Status::NumericalFailure;
+        out.reason = Some(Reason::Backend {
+            backend: "active-set",
+            message: format!(
+                "a proof of infeasibility ({}) that rounding made: with each joint's torque in a unit of its own (the torques' scales are {spread:.1e} apart) the grasp is feasible, and the interior-point method certified no optimum",
+                reason.map_or_else(String::new, |r| r.to_string()),
+            ),
+        });
+        out.active_set = None;
+        out.torque.clear();
+        out.iterations = iterations;
+        out.method = None;
+    }
+
     /// [`TorqueSolver::solve_fallback`]: `Ok` where it fills `out` with a certified
     /// answer; else `Err`, with `rays` the first ray of the dual its multipliers grew
     /// along, if any ([`ConicForm::dual_ray`], checked at each iterate from the

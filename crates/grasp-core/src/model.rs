@@ -1253,6 +1253,22 @@ impl GraspModel {
         (hi.0 != lo.0).then_some([hi, lo])
     }
 
+    /// The same grasp with each joint's weight `1 / reach_j²` ([`Self::row_reach`]), so
+    /// that every torque that carries force has scale 1 in the objective
+    /// ([`Self::torque_spread`]): each joint's torque in a unit of its own. Only the
+    /// objective changes (the passive torques' offset is one point of the same
+    /// consistent torques), so the grasp is feasible exactly where it is.
+    pub fn equilibrated(&self) -> Self {
+        let mut model = self.clone();
+        for (j, w) in model.weights.iter_mut().enumerate() {
+            let reach = self.row_reach[self.torque_row(j)];
+            if reach > 0.0 && (reach * reach).is_normal() {
+                *w = 1.0 / (reach * reach);
+            }
+        }
+        model
+    }
+
     /// Row i of `[G; E; Jᵀ]` (the order of [`Self::row_reach`] and [`Self::row_scale`]).
     pub fn stacked_row(&self, i: usize) -> &[f64] {
         let k = self.unactuated.nrows();

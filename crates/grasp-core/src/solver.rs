@@ -648,7 +648,7 @@ pub fn complete_deferred(solver: &mut dyn TorqueSolver, wrench: &[f64; 6], out: 
 /// 234500 3000` had spreads of 2.1e7 to 2.2e9 (the ninth, a near-passive internal
 /// force, of 3), and all 15 of `237500 4000` spreads of 5.3e5 or more, while real
 /// hands' are below 1e3 (revolute joints beside prismatic ones, in metres).
-const TORQUE_SPREAD_NOTE: f64 = 1e4;
+pub const TORQUE_SPREAD_NOTE: f64 = 1e4;
 
 /// A warning on an answer that is not one (`numerical_failure`, `iteration_limit`)
 /// where the torques' scales are more than [`TORQUE_SPREAD_NOTE`] apart: a likely

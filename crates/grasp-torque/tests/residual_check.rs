@@ -756,3 +756,112 @@ fn a_proof_that_holds_only_near_its_point_is_no_answer() {
         upper.objective
     );
 }
+
+/// A proof of infeasibility that the rounding of the larger torques made is no
+/// answer: `fixtures/fuzz/false-proof-from-joints-1e15-apart.json` (seed 297974,
+/// the torques' scales 1.3e15 apart) was `infeasible` at N = 4 and 8, and with exact
+/// cones by the circumscribed polyhedra, although the same grasp with each row of Jᵀ
+/// divided by its largest entry (each joint's torque in a unit of its own, which
+/// leaves the admissible forces as they are) is optimal at every N for both
+/// backends. The native solver now checks an `infeasible` answer with each joint's
+/// torque in a unit of its own where the scales are more than 1e4 apart: in seven
+/// systems of units, no answer is `infeasible`.
+#[test]
+fn a_proof_from_the_larger_torques_rounding_is_no_answer() {
+    use grasp_torque::{Backend, Cones};
+    let p = fuzz_fixture("false-proof-from-joints-1e15-apart");
+    let sides = [4, 8, 16, 32];
+    let units = UNITS
+        .iter()
+        .copied()
+        .chain([(122.05561425491729, 43.41573857120869)]);
+    for (l, f) in units {
+        let q = grasp_testkit::rescale(&p, l, f);
+        let mut answers: Vec<(String, Solution)> = by_sides(&q, &sides)
+            .into_iter()
+            .map(|(n, a)| (format!("N = {n}"), a))
+            .collect();
+        answers.push(("exact".into(), solved_exact(&q)));
+        for (n, a) in &answers {
+            assert_ne!(
+                a.status,
+                Status::Infeasible,
+                "lengths × {l:e}, forces × {f:e}, {n}: {:?}",
+                a.reason
+            );
+        }
+    }
+    // Each joint's torque in a unit of its own: both backends hold the grasp.
+    let mut q = p.clone();
+    for j in 0..q.jacobian_transpose.nrows() {
+        let row = q.jacobian_transpose.row_mut(j);
+        let big = row.iter().fold(0.0f64, |b, v| b.max(v.abs()));
+        row.iter_mut().for_each(|v| *v /= big);
+    }
+    let mut backends = vec![Backend::ActiveSet];
+    if cfg!(feature = "clarabel") {
+        backends.push(Backend::Clarabel);
+    }
+    for n in sides {
+        q.linearization.sides = n;
+        let sigma: Vec<f64> = (backends.iter())
+            .map(|&backend| {
+                let config = SolverConfig {
+                    backend: Some(backend),
+                    cones: Cones::Linear,
+                    ..Default::default()
+                };
+                let s = solved(&q, &config);
+                assert_eq!(
+                    s.status,
+                    Status::Optimal,
+                    "{backend:?}, N = {n}: {:?}",
+                    s.reason
+                );
+                s.objective
+            })
+            .collect();
+        assert!(
+            sigma
+                .iter()
+                .all(|s| (s - sigma[0]).abs() <= 1e-9 * sigma[0]),
+            "N = {n}: {sigma:?}"
+        );
+    }
+}
+
+/// The same check on a proof whose rows meet at the edge of their rounding:
+/// `fixtures/fuzz/proof-at-roundings-edge-beside-a-row-of-1e12.json` (seed 288967,
+/// a row of Jᵀ of 1.5e12 beside rows of 0.07–0.6) was `infeasible` at N = 16, from a
+/// combination 0 in y to 0.95 times its rounding, and `optimal` at N = 8, whose
+/// polygons N = 16's contain. Now, in each system of units that keeps the row within
+/// the input's bound of 1e12, no N is `infeasible`, σ falls as N grows, and in the
+/// file's units every N answers.
+#[test]
+fn a_proof_at_the_edge_of_its_rounding_is_checked_in_joint_units() {
+    let p = fuzz_fixture("proof-at-roundings-edge-beside-a-row-of-1e12");
+    let sides = [4, 8, 16, 32, 64];
+    for (l, f) in UNITS.iter().copied().filter(|&(l, _)| l <= 1.0) {
+        let q = grasp_testkit::rescale(&p, l, f);
+        let k2 = (l * f).powi(2);
+        let mut last = f64::INFINITY;
+        for (n, a) in by_sides(&q, &sides) {
+            let at = format!("lengths × {l:e}, forces × {f:e}, N = {n}");
+            assert_ne!(a.status, Status::Infeasible, "{at}: {:?}", a.reason);
+            assert!(
+                a.status == Status::Optimal || (l, f) != (1.0, 1.0),
+                "{at}: {:?}",
+                a.reason
+            );
+            if a.status != Status::Optimal {
+                continue;
+            }
+            let sigma = a.objective / k2;
+            assert!(
+                sigma <= last * (1.0 + 1e-9 + stated_excess(&a)),
+                "{at}: σ {sigma} above fewer sides' {last}"
+            );
+            last = sigma;
+        }
+    }
+}
