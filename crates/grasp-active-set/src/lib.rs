@@ -273,6 +273,20 @@ pub struct ActiveSetSolver {
     unit_check: bool,
 }
 
+/// A proof of infeasibility the solver could not settle: `numerical_failure`, with
+/// `message` as its reason, and the iterations of the run that made the proof.
+#[cold]
+fn unsettled(out: &mut Solution, message: String, iterations: usize) {
+    out.status = Status::NumericalFailure;
+    out.reason = Some(Reason::Backend {
+        backend: "active-set",
+        message,
+    });
+    out.active_set = None;
+    out.torque.clear();
+    out.iterations = iterations;
+}
+
 /// The interior-point method on the conic form of the linearised problem (its faces
 /// as nonnegative rows), with its buffers.
 #[derive(Clone, Debug)]
@@ -981,18 +995,12 @@ impl TorqueSolver for ActiveSetSolver {
                 out.iterations = iterations + ipm_iterations;
                 out.method = Some("interior_point");
             } else {
-                out.status = Status::NumericalFailure;
-                out.reason = Some(Reason::Backend {
-                    backend: "active-set",
-                    message: format!(
-                        "a proof of infeasibility that holds only near its own point (rows independent beyond their rounding: {}), which neither the interior-point method (no optimum, no ray of the dual) nor the iteration with rows counted independent down to {:.0e} of their norm settled",
-                        reason.map_or_else(String::new, |r| r.to_string()),
-                        self.engine.settings.dependence_tolerance * FINE_DEPENDENCE,
-                    ),
-                });
-                out.active_set = None;
-                out.torque.clear();
-                out.iterations = iterations;
+                let message = format!(
+                    "a proof of infeasibility that holds only near its own point (rows independent beyond their rounding: {}), which neither the interior-point method (no optimum, no ray of the dual) nor the iteration with rows counted independent down to {:.0e} of their norm settled",
+                    reason.map_or_else(String::new, |r| r.to_string()),
+                    self.engine.settings.dependence_tolerance * FINE_DEPENDENCE,
+                );
+                unsettled(out, message, iterations);
             }
         }
         if out.status == Status::Infeasible && self.unit_check {
@@ -1054,17 +1062,11 @@ impl ActiveSetSolver {
             return;
         }
         out.warnings.truncate(warnings);
-        out.status = Status::NumericalFailure;
-        out.reason = Some(Reason::Backend {
-            backend: "active-set",
-            message: format!(
-                "a proof of infeasibility ({}) that rounding made: with each joint's torque in a unit of its own (the torques' scales are {spread:.1e} apart) the grasp is feasible, and the interior-point method certified no optimum",
-                reason.map_or_else(String::new, |r| r.to_string()),
-            ),
-        });
-        out.active_set = None;
-        out.torque.clear();
-        out.iterations = iterations;
+        let message = format!(
+            "a proof of infeasibility ({}) that rounding made: with each joint's torque in a unit of its own (the torques' scales are {spread:.1e} apart) the grasp is feasible, and the interior-point method certified no optimum",
+            reason.map_or_else(String::new, |r| r.to_string()),
+        );
+        unsettled(out, message, iterations);
         out.method = None;
     }
 
