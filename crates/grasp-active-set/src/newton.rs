@@ -1256,9 +1256,12 @@ impl Newton {
         if self.apex_deficit(k) <= 0.0 {
             return true;
         }
-        // The Gram matrix of the free rows, and each active row's coefficients in them.
         let free: [bool; crate::ipm::SOC_MAX] =
             std::array::from_fn(|j| j < dim && !fixed(j, &self.a_red));
+        if self.rebalance_own_rows(k, &free[..dim]) {
+            return true;
+        }
+        // The Gram matrix of the free rows, and each active row's coefficients in them.
         let rows: [usize; crate::ipm::SOC_MAX] = std::array::from_fn(|j| start + j);
         let span = RowSpan::new(&self.a_red, &rows[..dim], &free[..dim]);
         let Some(span) = span else {
@@ -1316,6 +1319,104 @@ impl Newton {
         }
         self.nu_row[start..start + dim].copy_from_slice(&was[..dim]);
         false
+    }
+
+    /// [`Self::rebalance_apex`] where cone k's own free rows are dependent: the
+    /// equalities confine its contact's force to a plane or a line (with no wrench,
+    /// three point contacts' forces lie in the plane through them), and its rows'
+    /// multipliers are known only up to the combinations `u` with `Σ u_j a_j = 0`.
+    /// Where one points into the dual cone's interior, that plane meets the cone only
+    /// at its apex, and `ν + δ u` with the least δ puts the apex dual on the dual cone.
+    /// Without it the dual optimum is out of reach of multipliers left at 0 on the
+    /// dependent rows: the cone left its apex and came back until the guesses ran out,
+    /// and the interior-point method, with no strictly feasible point, grew the cone's
+    /// multiplier until it stalled (`fuzz_answers.py` seed 340274: the weighed Allegro
+    /// pinch with no wrench, the thumb at mu = 0.0083). Whether it did.
+    fn rebalance_own_rows(&mut self, k: usize, free: &[bool]) -> bool {
+        const SOC_MAX: usize = crate::ipm::SOC_MAX;
+        let (start, dim) = self.socs[k];
+        let rows: [usize; SOC_MAX] = std::array::from_fn(|j| start + j);
+        // Null vectors: each free row in the span of the independent rows before it.
+        let mut basis = [false; SOC_MAX];
+        let mut null = [[0.0; SOC_MAX]; SOC_MAX];
+        let mut count = 0;
+        for j in 0..dim {
+            if !free[j] {
+                continue;
+            }
+            let mut gamma = [0.0; SOC_MAX];
+            let in_span = basis[..j].contains(&true)
+                && RowSpan::new(&self.a_red, &rows[..j], &basis[..j])
+                    .is_some_and(|span| span.coefficients(&self.a_red, start + j, &mut gamma[..j]));
+            if in_span {
+                null[count][j] = 1.0;
+                for i in 0..j {
+                    null[count][i] = -gamma[i];
+                }
+                count += 1;
+            } else {
+                basis[j] = true;
+            }
+        }
+        if count == 0 {
+            return false;
+        }
+        // The combination nearest the dual cone's axis: e0 projected on their span,
+        // u = U (UᵀU)⁻¹ Uᵀ e0.
+        let mut gram = [0.0; SOC_MAX * SOC_MAX];
+        let mut c = [0.0; SOC_MAX];
+        for i in 0..count {
+            c[i] = null[i][0];
+            for j in 0..count {
+                gram[i * count + j] = null[i][..dim]
+                    .iter()
+                    .zip(&null[j][..dim])
+                    .map(|(a, b)| a * b)
+                    .sum();
+            }
+        }
+        if !cholesky(&mut gram[..count * count], count) {
+            return false;
+        }
+        forward(&gram[..count * count], count, &mut c[..count]);
+        backward(&gram[..count * count], count, &mut c[..count]);
+        let mut u = [0.0; SOC_MAX];
+        for i in 0..count {
+            for j in 0..dim {
+                u[j] += c[i] * null[i][j];
+            }
+        }
+        let (q, g) = (u[0], &u[1..dim]);
+        // (NaN fails too.)
+        if q.is_nan() || q <= soc_norm(g) {
+            return false;
+        }
+        // ‖t + δg‖ = h + δq: A δ² + B δ + C = 0, A < 0. The root with h + δq ≥ 0 is
+        // where the line enters the dual cone (the other is on its negative); past it,
+        // the line stays inside.
+        let (h, t) = (self.nu_row[start], &self.nu_row[start + 1..start + dim]);
+        let dotp = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        let (qa, qb, qc) = (
+            dotp(g, g) - q * q,
+            2.0 * (dotp(t, g) - h * q),
+            dotp(t, t) - h * h,
+        );
+        let disc = qb * qb - 4.0 * qa * qc;
+        if disc.is_nan() || disc < 0.0 {
+            return false;
+        }
+        let sq = disc.sqrt();
+        let Some(d) = [(-qb - sq) / (2.0 * qa), (-qb + sq) / (2.0 * qa)]
+            .into_iter()
+            .filter(|&d| d.is_finite() && h + d * q >= 0.0)
+            .reduce(f64::max)
+        else {
+            return false;
+        };
+        for j in 0..dim {
+            self.nu_row[start + j] += d * u[j];
+        }
+        true
     }
 
     /// The cone that leaves the apex when cone k's apex dual is outside the dual cone:

@@ -577,6 +577,34 @@ fn an_sfcl_pair_held_at_its_apex_by_limits_is_newtons() {
     newtons_in_four_units("fuzz/sfcl-finger-held-unloaded-by-limits", ORACLE);
 }
 
+/// A contact that the plane of the contacts' forces meets only at its apex
+/// (`fixtures/fuzz/contact-confined-to-a-plane-through-its-apex.json`, fuzz seed
+/// 340274: the weighed Allegro pinch with no wrench and the thumb at mu = 0.0083).
+/// The thumb's three cone rows are dependent on the equalities' solutions, and its
+/// apex dual is known only up to their combination `u` (`Newton::rebalance_own_rows`),
+/// which lies inside the dual cone. Before, Newton left the dependent row's multiplier
+/// at 0, the apex's dual fell outside its cone, and the interior-point method, with no
+/// strictly feasible point, grew that dual until it stalled: `numerical_failure` with
+/// lengths × 0.399 and forces × 2.83, `optimal` in SI. Newton now certifies it at the
+/// direct SOCP's σ* (`scripts/oracle_file.py`: cvxpy and Clarabel, 4.409748764085e-3).
+#[test]
+fn a_contact_confined_to_a_plane_through_its_apex_is_newtons() {
+    const ORACLE: f64 = 4.409748764085e-3;
+    newtons_in_four_units("fuzz/contact-confined-to-a-plane-through-its-apex", ORACLE);
+    let p = fixture("fuzz/contact-confined-to-a-plane-through-its-apex");
+    let s = run(
+        &grasp_testkit::rescale(&p, 0.399, 2.83),
+        Backend::ActiveSet,
+        Cones::Exact,
+    );
+    assert_eq!(s.method, Some("newton"), "{:?}", s.reason);
+    let thumb = &s.contact_forces[6..9];
+    assert!(
+        thumb.iter().all(|f| f.abs() <= 1e-12),
+        "the thumb's force {thumb:?} is not at its apex"
+    );
+}
+
 /// The fixture `name`, in four systems of units: Newton's `optimal`, σ* to 1e-9 of
 /// `oracle` (the oracle's accuracy, 1e-10, and the certificate's 2e-9 on σ).
 fn newtons_in_four_units(name: &str, oracle: f64) {

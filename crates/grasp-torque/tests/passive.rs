@@ -949,3 +949,63 @@ fn an_answer_the_check_refuses_is_solved_again_by_the_fallback() {
         s.warnings
     );
 }
+
+/// Thin cones with no wrench: every contact's friction in turn lowered to 0.05 and 0.01
+/// on the grasps above, unloaded but for the passive torques. With no wrench the
+/// contacts' forces are internal ones (three point contacts': in the plane through
+/// them), and a contact whose thin cone that set meets only at its apex is unloaded at
+/// every admissible torque: the exact problem has no strictly feasible point, and the
+/// contact's rows are dependent on the equalities' solutions
+/// (`fixtures/fuzz/contact-confined-to-a-plane-through-its-apex.json`; tests/exact.rs).
+/// Every answer is the direct SOCP's, `optimal` where it holds the grasp and
+/// `infeasible` where it proves it cannot, in four systems of units.
+#[test]
+fn thin_cones_with_no_wrench_match_the_direct_socp() {
+    let (mut compared, mut newton, mut fallback) = (0, 0, 0);
+    for seed in 0..300u64 {
+        let Some(mut p) = grasp(seed) else { continue };
+        p.wrench = [0.0; 6];
+        if let Some(tp) = &mut p.passive_torque {
+            let top = norm_inf(tp);
+            tp.iter_mut().for_each(|v| *v /= top);
+        }
+        for c in 0..p.contacts.len() {
+            for mu in [0.05, 0.01] {
+                let mut q = p.clone();
+                match &mut q.contacts[c] {
+                    ContactModel::Pcwf { mu: m }
+                    | ContactModel::SfcLinear { mu: m, .. }
+                    | ContactModel::SfcElliptic { mu: m, .. } => *m = mu,
+                    ContactModel::Fpc => continue,
+                }
+                let want = direct(&q);
+                for (l, f) in [(1.0, 1.0), (1e-3, 1.0), (37.0, 1e-2), (1.0, 1e3)] {
+                    let s = run(&rescale(&q, l, f), Backend::ActiveSet, Cones::Exact);
+                    let at = format!("seed {seed}, contact {c} at mu = {mu}, × ({l}, {f})");
+                    match want {
+                        Direct::Optimal(sigma, _) => {
+                            assert_eq!(s.status, Status::Optimal, "{at}: {:?}", s.reason);
+                            let back = s.objective / (l * f).powi(2);
+                            // (Clarabel's tolerances on the direct SOCP: 1e-10.)
+                            assert!(
+                                (back - sigma).abs() <= 1e-7 * sigma + 1e-9,
+                                "{at}: σ {back} against the direct SOCP's {sigma}"
+                            );
+                            newton += usize::from(s.method == Some("newton"));
+                            fallback += usize::from(s.method == Some("interior_point"));
+                            compared += 1;
+                        }
+                        Direct::Infeasible => {
+                            assert_eq!(s.status, Status::Infeasible, "{at}: {:?}", s.reason);
+                        }
+                        Direct::Unsure => {}
+                    }
+                }
+            }
+        }
+    }
+    eprintln!(
+        "{compared} thin-cone answers against the direct SOCP: {newton} by Newton, {fallback} by the interior-point method"
+    );
+    assert!(compared >= 1000, "{compared} compared");
+}
