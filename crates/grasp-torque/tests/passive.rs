@@ -195,6 +195,18 @@ fn grasp(seed: u64) -> Option<GraspProblem> {
     Some(p)
 }
 
+/// [`grasp`] with no wrench, its passive torques at most 1 (the problem is homogeneous
+/// in them), so that the direct SOCP's absolute tolerances are relative to their scale.
+fn unloaded_grasp(seed: u64) -> Option<GraspProblem> {
+    let mut p = grasp(seed)?;
+    p.wrench = [0.0; 6];
+    if let Some(tp) = &mut p.passive_torque {
+        let top = norm_inf(tp);
+        tp.iter_mut().for_each(|v| *v /= top);
+    }
+    Some(p)
+}
+
 #[test]
 fn passive_torques_match_a_direct_socp() {
     let (mut compared, mut infeasible, mut unsure, mut worst) = (0, 0, 0, 0.0f64);
@@ -615,14 +627,7 @@ fn passive_torques_alone_are_answered_with_unloaded_contacts() {
     let fixture = fuzz_fixture("unloaded-by-passive-torques");
     let mut problems = vec![("fixture".to_string(), fixture)];
     for seed in 0..300u64 {
-        let Some(mut p) = grasp(seed) else { continue };
-        p.wrench = [0.0; 6];
-        // The passive torques at most 1 (the problem is homogeneous in them), so that
-        // the direct SOCP's absolute tolerances are relative to their scale.
-        if let Some(tp) = &mut p.passive_torque {
-            let top = norm_inf(tp);
-            tp.iter_mut().for_each(|v| *v /= top);
-        }
+        let Some(mut p) = unloaded_grasp(seed) else { continue };
         if p.transmission.is_none() {
             let mut rng = Rng(seed ^ 0x3e16);
             let m = p.joints();
@@ -963,12 +968,7 @@ fn an_answer_the_check_refuses_is_solved_again_by_the_fallback() {
 fn thin_cones_with_no_wrench_match_the_direct_socp() {
     let (mut compared, mut newton, mut fallback) = (0, 0, 0);
     for seed in 0..300u64 {
-        let Some(mut p) = grasp(seed) else { continue };
-        p.wrench = [0.0; 6];
-        if let Some(tp) = &mut p.passive_torque {
-            let top = norm_inf(tp);
-            tp.iter_mut().for_each(|v| *v /= top);
-        }
+        let Some(p) = unloaded_grasp(seed) else { continue };
         for c in 0..p.contacts.len() {
             for mu in [0.05, 0.01] {
                 let mut q = p.clone();
