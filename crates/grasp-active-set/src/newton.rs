@@ -107,6 +107,12 @@ impl<'a> RowSpan<'a> {
     /// Row r's coefficients in the span, into `gamma`; whether r lies in it (the
     /// least-squares residual is rounding of the row).
     fn coefficients(&self, a: &Matrix, r: usize, gamma: &mut [f64]) -> bool {
+        self.coefficients_within(a, r, gamma, PINNED_ROW)
+    }
+
+    /// [`Self::coefficients`], r in the span where the least-squares residual is at
+    /// most `tol` of the row.
+    fn coefficients_within(&self, a: &Matrix, r: usize, gamma: &mut [f64], tol: f64) -> bool {
         let (k, ar) = (self.rows.len(), a.row(r));
         for (j, g) in gamma.iter_mut().enumerate() {
             *g = if self.free[j] {
@@ -121,7 +127,7 @@ impl<'a> RowSpan<'a> {
             let v: f64 = (0..k).map(|j| gamma[j] * a[(self.rows[j], c)]).sum();
             m.max((v - ar[c]).abs())
         });
-        !(off.is_nan() || off > PINNED_ROW * norm_inf(ar))
+        !(off.is_nan() || off > tol * norm_inf(ar))
     }
 }
 
@@ -1336,7 +1342,11 @@ impl Newton {
         const SOC_MAX: usize = crate::ipm::SOC_MAX;
         let (start, dim) = self.socs[k];
         let rows: [usize; SOC_MAX] = std::array::from_fn(|j| start + j);
-        // Null vectors: each free row in the span of the independent rows before it.
+        // Null vectors: each free row in the span of the independent rows before it, as
+        // Newton's constraints judge dependence ([`Self::apex_constraints`]: a plane
+        // through three contacts, formed through the pseudo-inverse and the equalities'
+        // null basis, can leave the third row 2500 ε off it). The certificate judges
+        // the multipliers this gives.
         let mut basis = [false; SOC_MAX];
         let mut null = [[0.0; SOC_MAX]; SOC_MAX];
         let mut count = 0;
@@ -1346,8 +1356,9 @@ impl Newton {
             }
             let mut gamma = [0.0; SOC_MAX];
             let in_span = basis[..j].contains(&true)
-                && RowSpan::new(&self.a_red, &rows[..j], &basis[..j])
-                    .is_some_and(|span| span.coefficients(&self.a_red, start + j, &mut gamma[..j]));
+                && RowSpan::new(&self.a_red, &rows[..j], &basis[..j]).is_some_and(|span| {
+                    span.coefficients_within(&self.a_red, start + j, &mut gamma[..j], INDEPENDENT)
+                });
             if in_span {
                 null[count][j] = 1.0;
                 for i in 0..j {

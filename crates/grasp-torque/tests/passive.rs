@@ -627,7 +627,9 @@ fn passive_torques_alone_are_answered_with_unloaded_contacts() {
     let fixture = fuzz_fixture("unloaded-by-passive-torques");
     let mut problems = vec![("fixture".to_string(), fixture)];
     for seed in 0..300u64 {
-        let Some(mut p) = unloaded_grasp(seed) else { continue };
+        let Some(mut p) = unloaded_grasp(seed) else {
+            continue;
+        };
         if p.transmission.is_none() {
             let mut rng = Rng(seed ^ 0x3e16);
             let m = p.joints();
@@ -956,21 +958,74 @@ fn an_answer_the_check_refuses_is_solved_again_by_the_fallback() {
 }
 
 /// Thin cones with no wrench: every contact's friction in turn lowered to 0.05 and 0.01
-/// on the grasps above, unloaded but for the passive torques. With no wrench the
-/// contacts' forces are internal ones (three point contacts': in the plane through
-/// them), and a contact whose thin cone that set meets only at its apex is unloaded at
-/// every admissible torque: the exact problem has no strictly feasible point, and the
+/// on the grasps above, unloaded but for the passive torques, and to 0.05, 0.01 and
+/// 0.001 on the bundled three-contact grasps, weighed by passive torques or with the
+/// other contacts pressed by a minimum normal force of 1. With no wrench the contacts'
+/// forces are internal ones (three point contacts': in the plane through them), and a
+/// contact whose thin cone that set meets only at its apex is unloaded at every
+/// admissible torque: the exact problem has no strictly feasible point, and the
 /// contact's rows are dependent on the equalities' solutions
 /// (`fixtures/fuzz/contact-confined-to-a-plane-through-its-apex.json`; tests/exact.rs).
 /// Every answer is the direct SOCP's, `optimal` where it holds the grasp and
 /// `infeasible` where it proves it cannot, in four systems of units.
 #[test]
 fn thin_cones_with_no_wrench_match_the_direct_socp() {
-    let (mut compared, mut newton, mut fallback) = (0, 0, 0);
+    // (Name, problem, the contacts thinned in turn, their frictions.)
+    let mut problems: Vec<(String, GraspProblem, Vec<usize>, &[f64])> = vec![];
     for seed in 0..300u64 {
-        let Some(p) = unloaded_grasp(seed) else { continue };
+        let Some(p) = unloaded_grasp(seed) else {
+            continue;
+        };
+        let all = (0..p.contacts.len()).collect();
+        problems.push((format!("seed {seed}"), p, all, &[0.05, 0.01]));
+    }
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
+    for name in [
+        "hand3-pcwf",
+        "table1/1-aluminium-block",
+        "table1/2-screwdriver",
+        "table1/3-plastic-bottle",
+        "table1/4-carbon-pen",
+        "table1/5-iron-piece",
+        "hands/allegro-pinch",
+        "hands/allegro-weighed",
+        "hands/shadow-tripod",
+    ] {
+        let p = grasp_torque::load_problem(format!("{dir}/{name}.json")).unwrap();
+        let mut weighed = p.clone();
+        weighed.wrench = [0.0; 6];
+        if weighed.passive_torque.is_none() {
+            let mut rng = Rng(name.len() as u64);
+            let m = p.joints();
+            weighed.passive_torque = Some((0..m).map(|_| rng.uniform(-0.05, 0.05)).collect());
+        }
+        let all = (0..p.contacts.len()).collect();
+        problems.push((
+            format!("{name}, weighed"),
+            weighed,
+            all,
+            &[0.05, 0.01, 0.001],
+        ));
+        // (A pressed contact in a thin cone that the plane of internal forces meets only
+        // at its apex is infeasible exactly, and for the stored G, whose plane holds to
+        // about 1e-12, feasible only with squeezes of 1e10: the direct SOCP calls that
+        // infeasible, the native solvers answer it. Only the unpressed contact thins.)
         for c in 0..p.contacts.len() {
-            for mu in [0.05, 0.01] {
+            let mut pressed = p.clone();
+            pressed.wrench = [0.0; 6];
+            pressed.min_normal_force = Some(
+                (0..p.contacts.len())
+                    .map(|i| f64::from(u8::from(i != c)))
+                    .collect(),
+            );
+            let name = format!("{name}, pressed but for contact {c}");
+            problems.push((name, pressed, vec![c], &[0.05, 0.01, 0.001]));
+        }
+    }
+    let (mut compared, mut newton, mut fallback) = (0, 0, 0);
+    for (name, p, thinned, frictions) in &problems {
+        for &c in thinned {
+            for &mu in frictions.iter() {
                 let mut q = p.clone();
                 match &mut q.contacts[c] {
                     ContactModel::Pcwf { mu: m }
@@ -981,7 +1036,7 @@ fn thin_cones_with_no_wrench_match_the_direct_socp() {
                 let want = direct(&q);
                 for (l, f) in [(1.0, 1.0), (1e-3, 1.0), (37.0, 1e-2), (1.0, 1e3)] {
                     let s = run(&rescale(&q, l, f), Backend::ActiveSet, Cones::Exact);
-                    let at = format!("seed {seed}, contact {c} at mu = {mu}, × ({l}, {f})");
+                    let at = format!("{name}, contact {c} at mu = {mu}, × ({l}, {f})");
                     match want {
                         Direct::Optimal(sigma, _) => {
                             assert_eq!(s.status, Status::Optimal, "{at}: {:?}", s.reason);
