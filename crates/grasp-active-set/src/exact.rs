@@ -346,22 +346,29 @@ impl ExactSolver {
     }
 
     /// Whether the circumscribed polyhedra at `sides` admit no torque for `w`; the
-    /// reason when they do not.
-    fn outer_infeasible(&mut self, w: &[f64; 6], sides: usize) -> Option<Reason> {
-        if !self.solve_outer(w, sides) {
+    /// reason when they do not, built in `out`'s kept buffers (whose rows the
+    /// polyhedra's next solve takes: an infeasible control loop allocates nothing).
+    fn outer_infeasible(
+        &mut self,
+        w: &[f64; 6],
+        sides: usize,
+        out: &mut Solution,
+    ) -> Option<Reason> {
+        if !self.solve_outer(w, sides) || self.lin.status != Status::Infeasible {
             return None;
         }
-        (self.lin.status == Status::Infeasible).then(|| Reason::OuterApproximation {
+        let cause = self
+            .lin
+            .reason
+            .take()
+            .unwrap_or_else(|| Reason::NoAdmissibleTorque {
+                relaxation: None,
+                blocking: Vec::new(),
+            });
+        self.lin.recycle_rows(out.recycled_rows());
+        Some(Reason::OuterApproximation {
             sides,
-            cause: Box::new(
-                self.lin
-                    .reason
-                    .take()
-                    .unwrap_or(Reason::NoAdmissibleTorque {
-                        relaxation: None,
-                        blocking: Vec::new(),
-                    }),
-            ),
+            cause: out.recycled_box(cause),
         })
     }
 
@@ -800,7 +807,7 @@ impl TorqueSolver for ExactSolver {
     }
 
     fn solve_raw(&mut self, w: &[f64; 6], warm: &WarmStart<'_>, out: &mut Solution) {
-        out.active_set = None;
+        out.recycle_active_set();
         out.iterations = 0;
         out.torque.clear();
         out.internal_forces.clear();
@@ -862,7 +869,7 @@ impl TorqueSolver for ExactSolver {
             }
             // 2. The circumscribed polyhedra.
             Status::Infeasible => {
-                if let Some(reason) = self.outer_infeasible(w, PROOF_SIDES) {
+                if let Some(reason) = self.outer_infeasible(w, PROOF_SIDES, out) {
                     return Self::infeasible(out, reason);
                 }
                 true
@@ -880,7 +887,7 @@ impl TorqueSolver for ExactSolver {
         // Where the inscribed polyhedra cannot hold the grasp, finer circumscribed ones:
         // a grasp at the edge of feasibility is usually outside them too.
         if inscribed_infeasible {
-            if let Some(reason) = self.outer_infeasible(w, MID_SIDES) {
+            if let Some(reason) = self.outer_infeasible(w, MID_SIDES, out) {
                 return Self::infeasible(out, reason);
             }
         }
@@ -902,7 +909,7 @@ impl TorqueSolver for ExactSolver {
         if alpha == 0.0 {
             return false;
         }
-        out.active_set = None;
+        out.recycle_active_set();
         out.iterations = 0;
         out.torque.clear();
         out.internal_forces.clear();
@@ -988,7 +995,7 @@ impl ExactSolver {
             return;
         }
         if !inscribed_feasible {
-            if let Some(reason) = self.outer_infeasible(w, FINE_SIDES) {
+            if let Some(reason) = self.outer_infeasible(w, FINE_SIDES, out) {
                 return Self::infeasible(out, reason);
             }
         }

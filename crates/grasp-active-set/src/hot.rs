@@ -118,8 +118,7 @@ impl Engine {
         out.torque.clear();
         out.torque.extend_from_slice(&hm.t0);
         add_columns(&mut out.torque, &hm.tw, w, 1.0);
-        let active = out.active_set.get_or_insert_with(Vec::new);
-        active.clear();
+        let active = out.cleared_active_set();
         active.extend_from_slice(&hm.active);
         out.multipliers.clear();
         out.multipliers.resize(self.rows.len(), 0.0);

@@ -282,7 +282,7 @@ fn unsettled(out: &mut Solution, message: String, iterations: usize) {
         backend: "active-set",
         message,
     });
-    out.active_set = None;
+    out.recycle_active_set();
     out.torque.clear();
     out.iterations = iterations;
 }
@@ -990,7 +990,7 @@ impl TorqueSolver for ActiveSetSolver {
             } else if let Some(ray) = ray {
                 out.status = Status::Infeasible;
                 out.reason = Some(ray);
-                out.active_set = None;
+                out.recycle_active_set();
                 out.torque.clear();
                 out.iterations = iterations + ipm_iterations;
                 out.method = Some("interior_point");
@@ -1154,7 +1154,7 @@ impl ActiveSetSolver {
             return Err(ray);
         };
         out.reason = None;
-        out.active_set = None;
+        out.recycle_active_set();
         out.iterations = f.ipm.iterations;
         out.method = Some("interior_point");
         f.conic.unscale_into(
@@ -1178,9 +1178,10 @@ impl Engine {
     ) {
         out.torque.clear();
         out.iterations = 0;
+        // (A reason's buffers are kept for the next: an infeasible control loop's.)
+        out.recycle_reason();
         self.local_proof = false;
-        let active = out.active_set.get_or_insert_with(Vec::new);
-        active.clear();
+        out.cleared_active_set();
         // Rows that no torque affects must hold for the wrench alone (a row the free
         // torques still move, set aside beside a far larger one, is left to the core's
         // check of the answer: `fuzz_answers.py nested` seed 48783, a face whose part in
@@ -1205,7 +1206,7 @@ impl Engine {
                     row: self.rows[row],
                     violation: c,
                 });
-                out.active_set = None;
+                out.recycle_active_set();
                 return;
             }
         }
@@ -1255,7 +1256,7 @@ impl Engine {
                 if feasible {
                     self.write_solution(out);
                 } else {
-                    out.active_set = None;
+                    out.recycle_active_set();
                 }
                 out.status = Status::IterationLimit;
                 out.reason = Some(Reason::Backend {
@@ -1268,7 +1269,8 @@ impl Engine {
             }
             End::Infeasible(row) => {
                 out.status = Status::Infeasible;
-                let mut blocking = self.blocking_description();
+                let mut blocking = out.recycled_rows();
+                self.blocking_into(&mut blocking);
                 let relaxation = match row {
                     Some(r) => {
                         blocking.push(self.rows[self.h_row[r]]);
@@ -1280,7 +1282,7 @@ impl Engine {
                     relaxation,
                     blocking,
                 });
-                out.active_set = None;
+                out.recycle_active_set();
             }
             End::Numerical(why) => {
                 out.status = Status::NumericalFailure;
@@ -1288,7 +1290,7 @@ impl Engine {
                     backend: "active-set",
                     message: why.to_string(),
                 });
-                out.active_set = None;
+                out.recycle_active_set();
             }
         }
     }
@@ -1605,15 +1607,16 @@ impl Engine {
         }
     }
 
-    /// The key-set rows at the end, for infeasibility reports.
-    fn blocking_description(&self) -> Vec<RowId> {
-        self.ws
-            .factor
-            .rows()
-            .iter()
-            .filter(|&&r| r != S_ROW)
-            .map(|&r| self.rows[self.h_row[r]])
-            .collect()
+    /// The key-set rows at the end, for infeasibility reports, appended to `out`.
+    fn blocking_into(&self, out: &mut Vec<RowId>) {
+        out.extend(
+            self.ws
+                .factor
+                .rows()
+                .iter()
+                .filter(|&&r| r != S_ROW)
+                .map(|&r| self.rows[self.h_row[r]]),
+        );
     }
 
     /// τ = D⁻¹(u0 + N y), the key set as rows of H, and multipliers for `Σ w τ²`.
@@ -1627,17 +1630,22 @@ impl Engine {
         for (t, d) in out.torque.iter_mut().zip(&self.dinv) {
             *t *= d;
         }
-        let active = out.active_set.get_or_insert_with(Vec::new);
-        active.clear();
         out.multipliers.clear();
         out.multipliers.resize(self.rows.len(), 0.0);
         for (pos, &r) in ws.factor.rows().iter().enumerate() {
             if r != S_ROW {
-                active.push(self.h_row[r]);
                 // ½‖y‖² on unit rows → ‖u‖² on rows of H: μ = 2 λ / ν.
                 out.multipliers[self.h_row[r]] = 2.0 * ws.factor.lambda(pos).max(0.0) / self.nu[r];
             }
         }
+        let active = out.cleared_active_set();
+        active.extend(
+            ws.factor
+                .rows()
+                .iter()
+                .filter(|&&r| r != S_ROW)
+                .map(|&r| self.h_row[r]),
+        );
         active.sort_unstable();
     }
 }

@@ -33,5 +33,5 @@ pub use qp::{
 };
 pub use solver::{
     complete_deferred, solve, solve_into, solve_into_with, Capabilities, Check, Diagnostics,
-    Reason, Solution, Status, TorqueSolver, WarmStart, WarmStartError,
+    Reason, Recycled, Solution, Status, TorqueSolver, WarmStart, WarmStartError,
 };

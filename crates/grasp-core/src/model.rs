@@ -267,6 +267,9 @@ pub struct ActuatorSpace {
     pub transmission_reach: Vec<f64>,
     /// Per joint, `Σ_j |Jᵀ_ij| · force_unit_j` (as [`GraspModel::row_reach`]).
     pub joint_reach: Vec<f64>,
+    /// [`Self::describe_unactuated`], once: an infeasible answer names the directions
+    /// on every solve.
+    pub unactuated_description: Vec<String>,
 }
 
 impl ActuatorSpace {
@@ -438,25 +441,22 @@ fn actuator_space(
             .collect(),
         None => Vec::new(),
     };
-    Ok((
-        jt,
-        unactuated,
-        Some(ActuatorSpace {
-            transmission: tm.clone(),
-            joint_jacobian_cols: column_major(m, n, |i, j| joint_rows[(i, j)]),
-            transmission_cols: column_major(m, a, |i, j| tm[(i, j)]),
-            transmission_reach: (0..m)
-                .map(|i| tm.row(i).iter().map(|v| v.abs()).sum())
-                .collect(),
-            joint_jacobian_transpose: joint_rows,
-            joint_names: p.joint_names.clone(),
-            unactuated_directions: q2t,
-            // Filled by the model, which knows the force units.
-            joint_reach: Vec::new(),
-        }),
-        targets,
-        zeroed,
-    ))
+    let mut space = ActuatorSpace {
+        transmission: tm.clone(),
+        joint_jacobian_cols: column_major(m, n, |i, j| joint_rows[(i, j)]),
+        transmission_cols: column_major(m, a, |i, j| tm[(i, j)]),
+        transmission_reach: (0..m)
+            .map(|i| tm.row(i).iter().map(|v| v.abs()).sum())
+            .collect(),
+        joint_jacobian_transpose: joint_rows,
+        joint_names: p.joint_names.clone(),
+        unactuated_directions: q2t,
+        // Filled by the model, which knows the force units.
+        joint_reach: Vec::new(),
+        unactuated_description: Vec::new(),
+    };
+    space.unactuated_description = space.describe_unactuated();
+    Ok((jt, unactuated, Some(space), targets, zeroed))
 }
 
 thread_local! {

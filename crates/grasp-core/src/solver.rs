@@ -391,9 +391,123 @@ pub struct Solution {
     pub diagnostics: Diagnostics,
     /// Warnings to show the user (for example the paper model's unbalanced wrench).
     pub warnings: Vec<String>,
+    /// Earlier reasons' buffers, which a new reason is built in: a control loop whose
+    /// ticks stay infeasible allocates nothing ([`Solution::recycle_reason`]). Not
+    /// part of the answer.
+    #[serde(skip)]
+    pub recycled: Recycled,
+}
+
+/// The buffers of reasons a [`Solution`] no longer holds: rows, boxes and names.
+#[derive(Clone, Default)]
+pub struct Recycled {
+    set: Vec<usize>,
+    rows: Vec<RowId>,
+    names: Vec<String>,
+    // (The boxes themselves are the buffers kept.)
+    #[allow(clippy::vec_box)]
+    boxes: Vec<Box<Reason>>,
+}
+
+impl fmt::Debug for Recycled {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("Recycled")
+    }
+}
+
+/// Boxes kept at most (a reason nests two: underactuated, around the circumscribed
+/// polyhedra's proof).
+const KEPT_BOXES: usize = 4;
+
+impl Recycled {
+    /// Takes `reason` apart into the buffers (the larger of two alike is kept).
+    fn keep(&mut self, reason: Reason) {
+        match reason {
+            Reason::NoAdmissibleTorque { blocking, .. } => self.keep_rows(blocking),
+            Reason::OuterApproximation { cause, .. } => self.keep_box(cause),
+            Reason::Underactuated { unactuated, cause } => {
+                if unactuated.capacity() > self.names.capacity() {
+                    self.names = unactuated;
+                }
+                self.keep_box(cause);
+            }
+            _ => {}
+        }
+    }
+
+    fn keep_rows(&mut self, rows: Vec<RowId>) {
+        if rows.capacity() > self.rows.capacity() {
+            self.rows = rows;
+        }
+    }
+
+    fn keep_box(&mut self, mut b: Box<Reason>) {
+        // (A placeholder that owns nothing takes the content's place.)
+        let inner = std::mem::replace(&mut *b, Reason::UnreachableWrench { residual: 0.0 });
+        if self.boxes.len() < KEPT_BOXES {
+            self.boxes.push(b);
+        }
+        self.keep(inner);
+    }
 }
 
 impl Solution {
+    /// Clears the reason, keeping its buffers for the next ([`Recycled`]).
+    pub fn recycle_reason(&mut self) {
+        if let Some(r) = self.reason.take() {
+            self.recycled.keep(r);
+        }
+    }
+
+    /// Clears the key set, keeping its buffer for the next ([`Recycled`]).
+    pub fn recycle_active_set(&mut self) {
+        if let Some(set) = self.active_set.take() {
+            if set.capacity() > self.recycled.set.capacity() {
+                self.recycled.set = set;
+            }
+        }
+    }
+
+    /// The key set, emptied, in a kept buffer where there is one.
+    pub fn cleared_active_set(&mut self) -> &mut Vec<usize> {
+        let Self {
+            active_set,
+            recycled,
+            ..
+        } = self;
+        let set = active_set.get_or_insert_with(|| std::mem::take(&mut recycled.set));
+        set.clear();
+        set
+    }
+
+    /// Keeps `rows`' buffer for a later reason (another solution's, say).
+    pub fn recycle_rows(&mut self, rows: Vec<RowId>) {
+        self.recycled.keep_rows(rows);
+    }
+
+    /// An empty list of rows for a new reason, in a kept buffer where there is one.
+    pub fn recycled_rows(&mut self) -> Vec<RowId> {
+        let mut rows = std::mem::take(&mut self.recycled.rows);
+        rows.clear();
+        rows
+    }
+
+    /// An empty list of names for a new reason, in a kept buffer where there is one.
+    pub fn recycled_names(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.recycled.names)
+    }
+
+    /// `reason` boxed, in a kept box where there is one.
+    pub fn recycled_box(&mut self, reason: Reason) -> Box<Reason> {
+        match self.recycled.boxes.pop() {
+            Some(mut b) => {
+                *b = reason;
+                b
+            }
+            None => Box::new(reason),
+        }
+    }
+
     /// Whether the status is optimal (at full or reduced accuracy).
     pub fn is_optimal(&self) -> bool {
         self.status.has_answer()
@@ -562,7 +676,9 @@ impl fmt::Display for Check {
 
 /// Solves with any backend and completes the answer with forces, objective and
 /// diagnostics, then checks it ([`Check::Full`]). Reuses `out`'s buffers: no
-/// allocation once they have grown to size (warnings aside).
+/// allocation once they have grown to size, an infeasible answer's reason included
+/// ([`Solution::recycled`]; warnings and the messages of answers that are not ones
+/// aside).
 pub fn solve_into(
     solver: &mut dyn TorqueSolver,
     wrench: &[f64; 6],
@@ -585,7 +701,7 @@ pub fn solve_into_with(
     // Two clock reads cost more than the lazy check itself on the smallest grasps.
     let start = (check == Check::Full).then(Instant::now);
     out.warnings.clear();
-    out.reason = None;
+    out.recycle_reason();
     out.multipliers.clear();
     out.internal_forces.clear();
     out.method = None;
@@ -599,7 +715,7 @@ pub fn solve_into_with(
         out.reason = Some(Reason::UnreachableWrench { residual });
         out.torque.clear();
         out.iterations = 0;
-        out.active_set = None;
+        out.recycle_active_set();
     } else {
         backend_solve(solver, wrench, warm, false, out);
     }
@@ -618,9 +734,11 @@ pub fn solve_into_with(
     if let Some(a) = &qp.model.actuators {
         if out.status == Status::Infeasible && a.unactuated_directions.nrows() > 0 {
             if let Some(cause) = out.reason.take() {
+                let mut unactuated = out.recycled_names();
+                unactuated.clone_from(&a.unactuated_description);
                 out.reason = Some(Reason::Underactuated {
-                    unactuated: a.describe_unactuated(),
-                    cause: Box::new(cause),
+                    unactuated,
+                    cause: out.recycled_box(cause),
                 });
             }
         }

@@ -1,7 +1,8 @@
 //! A solve with an unchanged grasp and a new wrench or warm start allocates nothing:
 //! counted with a wrapping global allocator.
 
-use grasp_torque::{load_problem, Check, Cones, GraspSolver, SolverConfig, WarmStart};
+use grasp_torque::problem::TorqueLimit;
+use grasp_torque::{load_problem, Check, Cones, GraspSolver, SolverConfig, Status, WarmStart};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -240,4 +241,68 @@ fn following_the_wrench_reuses_the_workspace() {
         assert!(out.is_optimal() && out.method == Some("newton"), "tick {k}");
     }
     assert_eq!(allocations() - before, 0, "a tick allocated");
+}
+
+/// A control loop whose wrench the limits cannot hold: its ticks' infeasible answers
+/// build their reasons (the blocking rows, the circumscribed polyhedra's proof, the
+/// unactuated directions) in the last ones' buffers, and a wrench that crosses the
+/// limits and back reuses the key set's. Torque limits of 1 and the bundled wrenches
+/// times 1e4 (times 1 within them, where they hold it).
+#[test]
+fn infeasible_ticks_reuse_the_workspace() {
+    for cones in [Cones::Linear, Cones::Exact] {
+        let config = SolverConfig {
+            cones,
+            ..Default::default()
+        };
+        for name in [
+            "paper-example",
+            "hand5-pcwf",
+            "hand4-sfcl",
+            "hand4-sfce",
+            "hand5-mixed",
+            "hands/shadow-tripod",
+            "hands/aero-pinch",
+        ] {
+            let path = format!(
+                "{}/fixtures/{name}.json",
+                concat!(env!("CARGO_MANIFEST_DIR"), "/../..")
+            );
+            let mut p = load_problem(path).unwrap();
+            let actuators = p
+                .transmission
+                .as_ref()
+                .map_or(p.joints(), |t| t.matrix.ncols());
+            p.torque_limits = Some(vec![Some(TorqueLimit::Symmetric(1.0)); actuators]);
+            let mut s = GraspSolver::new(&p, &config).unwrap();
+            let (mut held, mut beyond) = (p.wrench, p.wrench.map(|v| 1e4 * v));
+            let tick = |s: &mut GraspSolver, w: &[f64; 6], k: usize| {
+                let status = s.resolve(w).unwrap().status;
+                assert!(
+                    matches!(status, Status::Optimal | Status::Infeasible),
+                    "{name} ({cones}) tick {k}: {status}"
+                );
+                status
+            };
+            // Warm up: each of the solver's two solutions, and the exact solver's
+            // polyhedral views, meets both kinds of answer.
+            for k in 0..8 {
+                tick(&mut s, if k % 3 == 0 { &held } else { &beyond }, k);
+            }
+            let before = allocations();
+            let mut infeasible = 0;
+            for k in 0..30 {
+                held[k % 3] *= 1.0 + 0.001 * (k as f64).cos();
+                beyond[k % 3] *= 1.0 + 0.001 * (k as f64).cos();
+                // Ten ticks beyond the limits, then across them and back.
+                let w = if k < 10 || k % 3 != 0 { &beyond } else { &held };
+                infeasible += usize::from(tick(&mut s, w, k) == Status::Infeasible);
+            }
+            assert_eq!(allocations() - before, 0, "{name} ({cones}) allocated");
+            assert!(
+                infeasible >= 20,
+                "{name} ({cones}): {infeasible} infeasible ticks"
+            );
+        }
+    }
 }
