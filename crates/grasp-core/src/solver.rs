@@ -391,14 +391,15 @@ pub struct Solution {
     pub diagnostics: Diagnostics,
     /// Warnings to show the user (for example the paper model's unbalanced wrench).
     pub warnings: Vec<String>,
-    /// Earlier reasons' buffers, which a new reason is built in: a control loop whose
-    /// ticks stay infeasible allocates nothing ([`Solution::recycle_reason`]). Not
-    /// part of the answer.
+    /// Earlier answers' buffers (a reason's, a key set's), which the next answer is
+    /// built in: a control loop whose ticks stay infeasible, or cross the limits and
+    /// back, allocates nothing ([`Solution::recycle_reason`]). Not part of the answer.
     #[serde(skip)]
     pub recycled: Recycled,
 }
 
-/// The buffers of reasons a [`Solution`] no longer holds: rows, boxes and names.
+/// The buffers a [`Solution`] no longer holds, for its next answer: a key set, and a
+/// reason's rows, boxes and names.
 #[derive(Clone, Default)]
 pub struct Recycled {
     set: Vec<usize>,
