@@ -57,8 +57,21 @@ const APEX: f64 = 1e-9;
 /// A multiplier of a certified answer this small against the largest is an inactive
 /// piece's (see [`Newton::adopt`]).
 const ADOPT: f64 = 1e-6;
-/// A boundary piece this close to its apex during Newton's method is put at the apex.
+/// A boundary piece this close to its apex during Newton's method, relative to the size
+/// of its own terms ([`Newton::cone_terms`]), is put at the apex (and, at the end of
+/// the guess's iterations, one this close relative to the largest variable that is
+/// closing on it: [`CRAWL`]).
 const NEAR_APEX: f64 = 1e-6;
+/// A boundary piece whose `‖s1‖` shrank to this fraction of the last iterate's or less,
+/// [`CLOSING`] iterates in a row, is closing on its apex: Newton's steps there only
+/// halve it (its curvature `ν/‖s1‖` grows as fast). When Newton's iterations run out
+/// with such a piece within [`NEAR_APEX`] of the largest variable, the apex is the
+/// next guess (by its own terms it may not be near yet). Taken as soon as the third
+/// shrink is seen, it sent pieces whose optimum rests just off the apex there too
+/// (`newton_leaves_the_tangent_planes_it_converged_on`, seed 600583).
+const CRAWL: f64 = 0.75;
+/// See [`CRAWL`].
+const CLOSING: usize = 3;
 /// A line along y within this of a cone's boundary direction (`|d0² − ‖d1‖²|` against
 /// `‖d‖²`) is left to the general path: where it meets the cone, rounding decides.
 const LINE_PARALLEL: f64 = 1e-10;
@@ -175,6 +188,10 @@ pub(crate) struct Newton {
     /// cone): it goes back there only exactly at the apex, not near it, so that the
     /// guess cannot cycle.
     left_apex: Vec<bool>,
+    /// Per cone on its boundary, in this guess's Newton method: `‖s1‖ + |s0|` and `‖s1‖`
+    /// at the last iterate, and how many iterates in a row have shrunk `‖s1‖` to
+    /// [`CRAWL`] of the one before or less.
+    closing: Vec<(f64, f64, usize)>,
     /// Per cone that left its apex, the direction u of its tail (`MAX_TAIL` each).
     hint: Vec<f64>,
     /// Per cone, whether the current Newton step holds it to that tangent plane (its
@@ -361,6 +378,7 @@ impl Newton {
             active: vec![false; rows],
             piece: vec![Piece::Inside; socs.len()],
             left_apex: vec![false; socs.len()],
+            closing: vec![(f64::NAN, f64::NAN, 0); socs.len()],
             hint: vec![0.0; socs.len() * MAX_TAIL],
             tangent: vec![false; socs.len()],
             to_apex: Vec::with_capacity(MAX_CHANGES),
@@ -1157,8 +1175,58 @@ impl Newton {
     /// Whether cone k's slack is within [`NEAR_APEX`] of its apex.
     fn near_apex(&self, k: usize) -> bool {
         let (start, dim) = self.socs[k];
-        let tol = NEAR_APEX * norm_inf(&self.y).max(1.0);
-        self.s[start..start + dim].iter().all(|v| v.abs() <= tol)
+        // (A NaN slack is near nothing.)
+        let size = self.s[start..start + dim].iter().fold(0.0f64, |m, v| {
+            if v.abs() > m || v.is_nan() {
+                v.abs()
+            } else {
+                m
+            }
+        });
+        self.within_near_apex(k, size, norm_inf(&self.y))
+    }
+
+    /// The size of the terms behind cone k's slack at y: the largest over its rows of
+    /// `|b_i| + Σ_j |a_ij y_j|`, at least 1 (the scaled problem's size). Nearness to the
+    /// apex is judged against it, not against the largest variable: where contacts'
+    /// loads span seven decades (a whole hand), a boundary force of 1.6e-4 beside
+    /// variables of 690 was taken to its apex and back until the guesses ran out.
+    fn cone_terms(&self, k: usize) -> f64 {
+        let (start, dim) = self.socs[k];
+        let rows =
+            self.a_red.as_slice()[start * self.n..(start + dim) * self.n].chunks_exact(self.n);
+        let mut size = 1.0f64;
+        for (row, b) in rows.zip(&self.b_red[start..start + dim]) {
+            let t = b.abs()
+                + row
+                    .iter()
+                    .zip(&self.y)
+                    .map(|(a, y)| (a * y).abs())
+                    .sum::<f64>();
+            if t > size {
+                size = t;
+            }
+        }
+        size
+    }
+
+    /// Whether `size` (a distance of cone k's slack from its apex) is within
+    /// [`NEAR_APEX`] of the cone's terms; first against their bound `|b_i| + ‖a_i‖₁ ‖y‖∞`
+    /// (O(dim), `ymax` = ‖y‖∞), which settles almost every call.
+    fn within_near_apex(&self, k: usize, size: f64, ymax: f64) -> bool {
+        let (start, dim) = self.socs[k];
+        let mut bound = 1.0f64;
+        for (b, l1) in self.b_red[start..start + dim]
+            .iter()
+            .zip(&self.a_red_l1[start..start + dim])
+        {
+            let t = b.abs() + l1 * ymax;
+            if t > bound {
+                bound = t;
+            }
+        }
+        // (The bound widened past its own rounding: it only rejects.)
+        size <= NEAR_APEX * bound * (1.0 + 1e-9) && size <= NEAR_APEX * self.cone_terms(k)
     }
 
     /// Puts cone k at its apex; its contact's minimum normal force row is then implied.
@@ -1923,6 +1991,9 @@ impl Newton {
         // Only a cone that left its apex can be held to a tangent plane.
         let left_apex = self.left_apex.contains(&true);
         self.tangent.iter_mut().for_each(|t| *t = false);
+        self.closing
+            .iter_mut()
+            .for_each(|c| *c = (f64::NAN, f64::NAN, 0));
         // Whether Newton converged on the tangent planes, and the cones' own boundaries
         // took over from there, near their apex or not: an optimum that near the apex
         // (a contact barely loaded) would otherwise keep the planes to the end.
@@ -1958,6 +2029,7 @@ impl Newton {
             for j in 0..n {
                 self.h[j * n + j] = 2.0;
             }
+            let ymax = norm_inf(&self.y);
             for k in 0..self.socs.len() {
                 let (start, dim) = self.socs[k];
                 if self.piece[k] != Piece::Boundary {
@@ -1968,8 +2040,10 @@ impl Newton {
                 if r.is_nan() {
                     return Step::Failed;
                 }
-                let near = r + self.s[start].abs() <= NEAR_APEX * norm_inf(&self.y).max(1.0)
-                    || self.s[start] <= -r;
+                let size = r + self.s[start].abs();
+                let (_, last, runs) = self.closing[k];
+                self.closing[k] = (size, r, if r <= CRAWL * last { runs + 1 } else { 0 });
+                let near = self.within_near_apex(k, size, ymax) || self.s[start] <= -r;
                 // (Only from the apex, on the first step, and while it stays there: a
                 // cone released to its boundary that nears the apex again is the apex
                 // piece again. Back on the plane, Newton alternated between plane and
@@ -2202,7 +2276,18 @@ impl Newton {
                 }
             }
         }
-        Step::Failed
+        // Out of iterations: a piece closing on its apex goes there (see CRAWL).
+        let near = NEAR_APEX * norm_inf(&self.y).max(1.0);
+        let closing = (0..self.socs.len())
+            .filter(|&k| {
+                let (size, _, runs) = self.closing[k];
+                self.piece[k] == Piece::Boundary && runs >= CLOSING && size <= near
+            })
+            .min_by(|&a, &b| self.closing[a].0.total_cmp(&self.closing[b].0));
+        match closing {
+            Some(k) => Step::AtApex(k),
+            None => Step::Failed,
+        }
     }
 }
 
